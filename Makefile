@@ -1,0 +1,108 @@
+# portray: one Makefile, no configure step.
+#   make              build bin/portray-master and bin/portray-worker
+#   make test         build and run every test (ends with "N passed, N failed")
+#   make bench        print speed and memory figures
+#   make fuzz         run the libFuzzer targets (clang)  FUZZ_SECONDS=600
+#   make install      PREFIX=/usr/local DESTDIR=
+#   make SAN=address,undefined test   sanitizer build (objects under build/san)
+CC      ?= cc
+OPT     ?= -O2
+CSTD    := -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE
+WARN    := -Wall -Wextra -Wshadow -Wmissing-prototypes -Wstrict-prototypes
+CFLAGS  ?= $(OPT) -g
+ALL_CFLAGS = $(CSTD) $(WARN) $(CFLAGS) -I. -MMD -MP -pthread
+LDLIBS  := -lm -pthread
+PREFIX  ?= /usr/local
+VERSION := 0.11.0
+
+ifdef SAN
+BUILD   := build/san
+ALL_CFLAGS += -fsanitize=$(SAN) -fno-omit-frame-pointer
+LDFLAGS += -fsanitize=$(SAN)
+else
+BUILD   := build
+endif
+
+COMMON_SRC := $(wildcard common/*.c)
+PROTO_SRC  := $(wildcard proto/*.c)
+MASTER_SRC := $(wildcard master/*.c)
+WORKER_SRC := $(wildcard worker/*.c)
+UNIT_SRC   := $(wildcard tests/unit/test_*.c)
+FUZZ_SRC   := $(wildcard tests/fuzz/fuzz_*.c)
+BENCH_SRC  := $(wildcard bench/bench_*.c)
+
+obj = $(patsubst %.c,$(BUILD)/%.o,$(1))
+
+LIBCORE  := $(BUILD)/libportray.a
+CORE_OBJ := $(call obj,$(COMMON_SRC) $(PROTO_SRC))
+
+MASTER_BIN := bin/portray-master
+WORKER_BIN := bin/portray-worker
+UNIT_BIN   := $(patsubst tests/unit/%.c,$(BUILD)/tests/%,$(UNIT_SRC))
+FUZZ_REPLAY:= $(patsubst tests/fuzz/%.c,$(BUILD)/tests/%-replay,$(FUZZ_SRC))
+BENCH_BIN  := $(patsubst bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
+
+.PHONY: all test bench fuzz install uninstall clean
+all: $(MASTER_BIN) $(WORKER_BIN)
+
+$(BUILD)/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -DPORTRAY_VERSION='"$(VERSION)"' -c $< -o $@
+
+$(LIBCORE): $(CORE_OBJ)
+	@mkdir -p $(dir $@)
+	rm -f $@ && $(AR) rcs $@ $^
+
+$(MASTER_BIN): $(call obj,$(MASTER_SRC)) $(LIBCORE)
+	@mkdir -p bin
+	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+$(WORKER_BIN): $(call obj,$(WORKER_SRC)) $(LIBCORE)
+	@mkdir -p bin
+	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+$(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIBCORE)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+# Fuzz targets: replay build links tests/fuzz/replay_main.c (no libFuzzer needed).
+$(BUILD)/tests/%-replay: $(BUILD)/tests/fuzz/%.o $(BUILD)/tests/fuzz/replay_main.o $(LIBCORE)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+$(BUILD)/bench/%: $(BUILD)/bench/%.o $(LIBCORE)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+test: all $(UNIT_BIN) $(FUZZ_REPLAY)
+	@BUILD=$(BUILD) sh tests/run.sh
+
+bench: all $(BENCH_BIN)
+	@BUILD=$(BUILD) sh bench/run.sh
+
+# libFuzzer builds live under build/fuzz with clang; each target runs FUZZ_SECONDS.
+FUZZ_SECONDS ?= 600
+FUZZ_CC ?= clang
+FUZZ_FLAGS := $(CSTD) -g -O1 -I. -pthread -fsanitize=fuzzer,address,undefined
+fuzz:
+	@mkdir -p build/fuzz
+	@for f in $(FUZZ_SRC); do \
+	  n=$$(basename $$f .c); \
+	  echo "== $$n"; \
+	  $(FUZZ_CC) $(FUZZ_FLAGS) -DPORTRAY_VERSION='"$(VERSION)"' -o build/fuzz/$$n $$f $(COMMON_SRC) $(PROTO_SRC) -lm || exit 1; \
+	  mkdir -p build/fuzz/corpus-$$n; \
+	  build/fuzz/$$n -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 \
+	    build/fuzz/corpus-$$n tests/fuzz/corpus/$$n 2>&1 | tail -n 5 || exit 1; \
+	done
+
+install: all
+	install -d $(DESTDIR)$(PREFIX)/bin
+	install -m 755 $(MASTER_BIN) $(WORKER_BIN) $(DESTDIR)$(PREFIX)/bin/
+
+uninstall:
+	rm -f $(DESTDIR)$(PREFIX)/bin/portray-master $(DESTDIR)$(PREFIX)/bin/portray-worker
+
+clean:
+	rm -rf build bin
+
+-include $(shell find build -name '*.d' 2>/dev/null)

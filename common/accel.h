@@ -1,0 +1,59 @@
+/*
+ * accel.h - geometry and acceleration: the scene model's objects turned into
+ * intersectable primitives under a BVH (two-level: defined objects are built
+ * once and referenced by instances with a transform).
+ *
+ * Owner of the geometry: common/geom*.c, common/bvh.c, common/accel.c.
+ * The accel keeps a pointer to the scene; the scene must outlive it.
+ */
+#ifndef PORTRAY_ACCEL_H
+#define PORTRAY_ACCEL_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "common/scene.h"
+
+struct ray {
+	vec3 o, d;         /* origin and direction (need not be unit length) */
+	double tmin, tmax; /* hits accepted with tmin < t < tmax */
+};
+
+struct hit {
+	double t;          /* ray parameter of the hit */
+	vec3 p;            /* world-space point */
+	vec3 n;            /* world shading normal, unit length (interpolated for smooth
+			      triangles); NOT flipped toward the ray */
+	vec3 ng;           /* world geometric normal, unit, same side as n */
+	vec3 mp;           /* the point in the object space of the object that owns the
+			      material (type I shaders: textures move with objects) */
+	double u, v;       /* surface mapping in [0,1) where natural (type II shaders) */
+	uint32_t material; /* resolved material index, SCENE_NONE = default material */
+	uint32_t object;   /* index of the leaf object hit (scene.objects) */
+};
+
+struct accel;
+
+struct accel_stats {
+	double build_seconds;
+	size_t bytes;            /* memory held by the accel */
+	uint64_t n_prims;        /* leaf primitives built (triangles count one each) */
+	uint64_t n_instances;    /* instance references */
+	uint64_t n_nodes;        /* BVH nodes over all levels */
+};
+
+/* Builds the acceleration for the scene's roots. Returns 0 or an error level. */
+int accel_build(const struct scene *s, struct accel **out, struct scene_error *err);
+void accel_free(struct accel *a);
+void accel_get_stats(const struct accel *a, struct accel_stats *st);
+
+/* Closest hit in (r->tmin, r->tmax); fills *h and returns true if any. Thread-safe. */
+bool accel_intersect(const struct accel *a, const struct ray *r, struct hit *h);
+/* True if anything is hit in (r->tmin, r->tmax): early exit, for shadow rays. */
+bool accel_occluded(const struct accel *a, const struct ray *r);
+
+/* Brute force reference (no BVH), for tests: same contract as accel_intersect. */
+bool accel_intersect_brute(const struct accel *a, const struct ray *r, struct hit *h);
+
+#endif

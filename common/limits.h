@@ -1,0 +1,50 @@
+/*
+ * limits.h - every limit portray enforces, in one place, each with its reason.
+ *
+ * Untrusted input (scene files, RAW files, bytes off a socket) is checked
+ * against these before anything is allocated. A test build may shrink them
+ * (-DPORTRAY_SMALL_LIMITS) to give bugs a chance, as Lua's ltests.h does.
+ */
+#ifndef PORTRAY_LIMITS_H
+#define PORTRAY_LIMITS_H
+
+/* include nesting; the issue asks for 32, deeper is a cycle in practice */
+#define LIM_INCLUDE_DEPTH 32
+/* one token (names, file names, numbers): longer is not a real scene */
+#define LIM_TOKEN_LEN 1024
+/* scene/camera/include file size: 1 GiB keeps size_t arithmetic trivially safe */
+#define LIM_FILE_BYTES (1024ull * 1024 * 1024)
+/* RAW mesh file size: 2 GiB is ~30M triangles of text */
+#define LIM_RAW_BYTES (2048ull * 1024 * 1024)
+/* triangles in one RAW mesh: indices are uint32 */
+#define LIM_MESH_TRIANGLES (64u * 1024 * 1024)
+/* objects (every primitive, CSG node and instance) in one scene */
+#define LIM_OBJECTS (64u * 1024 * 1024)
+/* named materials, definitions, lights, meshes */
+#define LIM_MATERIALS (1u << 20)
+#define LIM_DEFINES (1u << 20)
+#define LIM_LIGHTS 65536u
+#define LIM_MESHES 65536u
+/* CSG nesting and define nesting: recursion in the tracer is bounded by these */
+#define LIM_CSG_DEPTH 64
+#define LIM_DEFINE_DEPTH 64
+/* shader materials nest (a bumpy over a noise over a fades ...) */
+#define LIM_SHADER_DEPTH 16
+/* entries in a fades list */
+#define LIM_FADES_ENTRIES 256
+/* polygon: contours and vertices */
+#define LIM_POLY_CONTOURS 4096u
+#define LIM_POLY_VERTICES (1u << 20)
+/* filters in a camera: 8 layered filters is already absurd (the manual's 900 rays) */
+#define LIM_FILTERS 16
+/* samples of any one filter or light; keeps rays per pixel bounded */
+#define LIM_SAMPLES 4096
+/* adaptive filter max-depth: 2^depth sub-pixels per side */
+#define LIM_ADAPTIVE_DEPTH 8
+/* image size in pixels, per side and in total (RGB8 buffer fits easily) */
+#define LIM_IMAGE_SIDE 65536
+#define LIM_IMAGE_PIXELS (256ull * 1024 * 1024)
+/* shader terms (bumpy, turb3d octaves) */
+#define LIM_TERMS 32
+
+#endif

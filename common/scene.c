@@ -1,0 +1,697 @@
+/*
+ * scene.c - the scene model's defaults, builder and lookups.
+ */
+#include "common/scene.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+int scene_errorf(struct scene_error *err, int level, const char *fmt, ...)
+{
+	if (err) {
+		va_list ap;
+		va_start(ap, fmt);
+		vsnprintf(err->msg, sizeof err->msg, fmt, ap);
+		va_end(ap);
+		err->level = level;
+	}
+	return level;
+}
+
+/* ---- defaults ------------------------------------------------------------ */
+
+void scene_filter_defaults(struct scene_filter *f, enum filter_kind kind)
+{
+	memset(f, 0, sizeof *f);
+	f->kind = kind;
+	f->threshold = 0.2;
+	f->max_depth = 3;
+	f->cache_size = 1000;
+	f->relax = 1.2;
+	f->x_samples = 2;
+	f->y_samples = 2;
+	f->radius = kind == FILTER_LENS ? 0.1 : 0.707;
+	f->samples = 4;
+	f->focal_length = 1000.0;
+}
+
+void scene_camera_defaults(struct scene_camera *c)
+{
+	memset(c, 0, sizeof *c);
+	c->look_at = v3(0, 0, 0);
+	c->drop_line = v3(0, -1, 0);
+	c->look_from = v3(0, 0, 10);
+	c->depth = 0.028;
+	c->x_size = 0.032;
+	c->y_size = 0.024;
+	scene_filter_defaults(&c->filters[0], FILTER_STANDARD);
+	c->n_filters = 1;
+}
+
+void scene_image_defaults(struct scene_image *im)
+{
+	memset(im, 0, sizeof *im);
+	im->xsize = 320;
+	im->ysize = 240;
+	im->intersect_buffer = 1000;
+}
+
+void scene_light_defaults(struct scene_light *l)
+{
+	memset(l, 0, sizeof *l);
+	l->colour = v3(1, 1, 1);
+	l->shape = LIGHT_POINT;
+	l->sphere.radius = 1;
+	l->sphere.pole = v3(0, 1, 0);
+	l->sphere.equator = v3(1, 0, 0);
+	l->cylinder.to = v3(0, 1, 0);
+	l->cylinder.radius = 1;
+	l->box.b = v3(1, 1, 1);
+	l->samples = 1;
+	l->fall_off = 0;
+}
+
+void scene_shader_defaults(struct scene_shader *s, enum shader_kind kind)
+{
+	memset(s, 0, sizeof *s);
+	s->kind = kind;
+	s->size = 1.0;
+	s->mat_a = SCENE_NONE;
+	s->mat_b = SCENE_NONE;
+	s->tile_width = 8;
+	s->grout_width = 1;
+	s->terms = 4;
+	s->axis_size = v3(1, 1, 1);
+	s->saturation = 3.1416;
+	s->depth = kind == SHADER_TURB3D ? 1.0 : 0.2;
+	s->variance = 0.5;
+	s->colour = v3(0.5, 0.5, 0.5);
+	s->axis = v3(0, 1, 0);
+}
+
+void scene_material_defaults(struct scene_material *m)
+{
+	memset(m, 0, sizeof *m);
+	m->diff_colour = v3(1, 1, 1);
+	m->spec_colour = v3(1, 1, 1);
+	m->tran_colour = v3(1, 1, 1);
+	m->diffuse = 1.0;
+	m->specular = 0.0;
+	m->spec_power = 20.0;
+	m->reflection = 0.0;
+	m->transparency = 0.0;
+	m->ior = 1.0;
+	scene_shader_defaults(&m->shader, SHADER_NONE);
+}
+
+const struct scene_material *scene_default_material(void)
+{
+	static struct scene_material def;
+	static int init;
+	if (!init) { /* idempotent: every thread would write the same bytes */
+		struct scene_material m;
+		scene_material_defaults(&m);
+		def = m;
+		init = 1;
+	}
+	return &def;
+}
+
+void scene_object_defaults(struct scene_object *o, enum prim_kind kind)
+{
+	memset(o, 0, sizeof *o);
+	o->kind = kind;
+	o->xform = m34_identity();
+	o->material = SCENE_NONE;
+	switch (kind) {
+	case PRIM_SPHERE:
+		o->u.sphere.radius = 1;
+		o->u.sphere.pole = v3(0, 1, 0);
+		o->u.sphere.equator = v3(1, 0, 0);
+		break;
+	case PRIM_PLANE:
+	case PRIM_DISK:
+		o->u.plane.normal = v3(0, 1, 0);
+		o->u.plane.radius = 1;
+		break;
+	case PRIM_CYLINDER:
+		o->u.cylinder.to = v3(0, 1, 0);
+		o->u.cylinder.radius = 1;
+		break;
+	case PRIM_BOX:
+		o->u.box.b = v3(1, 1, 1);
+		break;
+	case PRIM_TRIANGLE:
+		o->u.triangle.b = v3(1, 0, 0);
+		o->u.triangle.c = v3(0, 1, 0);
+		break;
+	case PRIM_CSG:
+		o->u.csg.operand1 = SCENE_NONE;
+		o->u.csg.operand2 = SCENE_NONE;
+		break;
+	case PRIM_RAW:
+		o->u.raw.mesh = SCENE_NONE;
+		break;
+	case PRIM_INSTANCE:
+		o->u.instance.define = SCENE_NONE;
+		break;
+	default:
+		break;
+	}
+}
+
+/* ---- lifetime -------------------------------------------------------------- */
+
+struct scene *scene_new(void)
+{
+	struct scene *s = calloc(1, sizeof *s);
+	if (!s)
+		return NULL;
+	scene_camera_defaults(&s->camera);
+	scene_image_defaults(&s->image);
+	return s;
+}
+
+static void object_free_owned(struct scene_object *o)
+{
+	if (o->kind == PRIM_POLYGON) {
+		free(o->u.polygon.contour_start);
+		free(o->u.polygon.points);
+		o->u.polygon.contour_start = NULL;
+		o->u.polygon.points = NULL;
+	}
+}
+
+static void mesh_free_owned(struct scene_mesh *m)
+{
+	free(m->file);
+	free(m->vertices);
+	free(m->normals);
+	free(m->tris);
+	memset(m, 0, sizeof *m);
+}
+
+void scene_free(struct scene *s)
+{
+	if (!s)
+		return;
+	for (uint32_t i = 0; i < s->n_materials; i++) {
+		free(s->materials[i].name);
+		free(s->materials[i].shader.fades);
+	}
+	for (uint32_t i = 0; i < s->n_meshes; i++)
+		mesh_free_owned(&s->meshes[i]);
+	for (uint32_t i = 0; i < s->n_objects; i++)
+		object_free_owned(&s->objects[i]);
+	for (uint32_t i = 0; i < s->n_defines; i++) {
+		free(s->defines[i].name);
+		free(s->defines[i].objects);
+	}
+	for (uint32_t i = 0; i < s->n_files; i++)
+		free(s->files[i]);
+	free(s->lights);
+	free(s->materials);
+	free(s->meshes);
+	free(s->objects);
+	free(s->defines);
+	free(s->roots);
+	free(s->files);
+	free(s);
+}
+
+/*
+ * Grows *arr (elements of size elem) so that one more fits below limit.
+ * Returns 0 on success, -1 when the limit is reached or memory runs out.
+ */
+static int grow(void **arr, uint32_t n, uint32_t *cap, size_t elem, uint32_t limit)
+{
+	if (n < *cap)
+		return 0;
+	if (n >= limit)
+		return -1;
+	uint64_t nc = *cap ? (uint64_t)*cap * 2 : 16;
+	if (nc > limit)
+		nc = limit;
+	void *p = realloc(*arr, (size_t)nc * elem);
+	if (!p)
+		return -1;
+	*arr = p;
+	*cap = (uint32_t)nc;
+	return 0;
+}
+
+const char *scene_intern_file(struct scene *s, const char *name)
+{
+	for (uint32_t i = 0; i < s->n_files; i++)
+		if (strcmp(s->files[i], name) == 0)
+			return s->files[i];
+	if (grow((void **)&s->files, s->n_files, &s->cap_files, sizeof *s->files, 1u << 20) < 0)
+		return NULL;
+	char *dup = strdup(name);
+	if (!dup)
+		return NULL;
+	s->files[s->n_files++] = dup;
+	return dup;
+}
+
+/* ---- validation helpers -------------------------------------------------------- */
+
+static const char *loc_file(const struct src_loc *l) { return l->file ? l->file : "<scene>"; }
+
+#define LOCFMT "%s:%d:%d: error: "
+#define LOCARGS(l) loc_file(l), (l)->line, (l)->col
+
+static int finite_pos(double v) { return isfinite(v) && v > 0; }
+static int finite_nonneg(double v) { return isfinite(v) && v >= 0; }
+
+static int check_filter(const struct scene_filter *f, struct scene_error *err)
+{
+	if (!(finite_pos(f->threshold) && f->max_depth >= 0 && f->max_depth <= LIM_ADAPTIVE_DEPTH &&
+	      f->cache_size >= 0 && finite_pos(f->relax) && f->x_samples >= 1 &&
+	      f->x_samples <= LIM_SAMPLES && f->y_samples >= 1 && f->y_samples <= LIM_SAMPLES &&
+	      finite_nonneg(f->radius) && f->samples >= 1 && f->samples <= LIM_SAMPLES &&
+	      finite_pos(f->focal_length) && (int)f->kind >= 0 && f->kind <= FILTER_LENS))
+		return scene_errorf(err, ERRLEVEL_FATAL, LOCFMT "filter %s has a value out of range",
+				    LOCARGS(&f->loc), scene_filter_name(f->kind));
+	return 0;
+}
+
+int scene_set_camera(struct scene *s, const struct scene_camera *c, struct scene_error *err)
+{
+	if (!v3_finite(c->look_at) || !v3_finite(c->look_from) || !v3_finite(c->drop_line))
+		return scene_errorf(err, 1, LOCFMT "camera vectors must be finite", LOCARGS(&c->loc));
+	if (!finite_pos(c->depth) || !finite_pos(c->x_size) || !finite_pos(c->y_size))
+		return scene_errorf(err, 1, LOCFMT "camera depth, x-size and y-size must be positive",
+				    LOCARGS(&c->loc));
+	vec3 view = v3_sub(c->look_at, c->look_from);
+	if (v3_len(view) == 0)
+		return scene_errorf(err, 1, LOCFMT "camera look-at equals look-from", LOCARGS(&c->loc));
+	if (v3_len(v3_cross(view, c->drop_line)) <= 1e-12 * v3_len(view) * v3_len(c->drop_line))
+		return scene_errorf(err, 1, LOCFMT "camera drop-line is zero or parallel to the view direction",
+				    LOCARGS(&c->loc));
+	if (c->n_filters < 0 || c->n_filters > LIM_FILTERS)
+		return scene_errorf(err, 1, LOCFMT "too many filters", LOCARGS(&c->loc));
+	for (int i = 0; i < c->n_filters; i++)
+		if (check_filter(&c->filters[i], err))
+			return err->level;
+	s->camera = *c;
+	return 0;
+}
+
+int scene_set_image(struct scene *s, const struct scene_image *im, struct scene_error *err)
+{
+	if (im->xsize < 1 || im->ysize < 1 || im->xsize > LIM_IMAGE_SIDE || im->ysize > LIM_IMAGE_SIDE ||
+	    (uint64_t)im->xsize * (uint64_t)im->ysize > LIM_IMAGE_PIXELS)
+		return scene_errorf(err, 1, LOCFMT "image size %dx%d out of range (1..%d per side)",
+				    LOCARGS(&im->loc), im->xsize, im->ysize, LIM_IMAGE_SIDE);
+	if (im->intersect_buffer < 0)
+		return scene_errorf(err, 1, LOCFMT "intersect-buffer must not be negative", LOCARGS(&im->loc));
+	s->image = *im;
+	return 0;
+}
+
+static int check_sphere(const struct prim_sphere *p)
+{
+	return v3_finite(p->centre) && finite_pos(p->radius) && v3_finite(p->pole) &&
+	       v3_finite(p->equator) && v3_len(p->pole) > 0;
+}
+
+static int check_cylinder(const struct prim_cylinder *p)
+{
+	return v3_finite(p->from) && v3_finite(p->to) && finite_pos(p->radius) &&
+	       v3_len(v3_sub(p->to, p->from)) > 0;
+}
+
+static int check_box(const struct prim_box *p) { return v3_finite(p->a) && v3_finite(p->b); }
+
+int scene_add_light(struct scene *s, const struct scene_light *l, struct scene_error *err)
+{
+	int ok = v3_finite(l->colour) && v3_finite(l->position) && finite_nonneg(l->fall_off) &&
+		 l->samples >= 1 && l->samples <= LIM_SAMPLES && (int)l->shape >= 0 && l->shape <= LIGHT_BOX;
+	if (ok && l->shape == LIGHT_SPHERE)
+		ok = check_sphere(&l->sphere);
+	if (ok && l->shape == LIGHT_CYLINDER)
+		ok = check_cylinder(&l->cylinder);
+	if (ok && l->shape == LIGHT_BOX)
+		ok = check_box(&l->box);
+	if (!ok)
+		return scene_errorf(err, 1, LOCFMT "light has a value out of range", LOCARGS(&l->loc));
+	if (grow((void **)&s->lights, s->n_lights, &s->cap_lights, sizeof *s->lights, LIM_LIGHTS) < 0)
+		return scene_errorf(err, 1, LOCFMT "too many lights or out of memory", LOCARGS(&l->loc));
+	s->lights[s->n_lights++] = *l;
+	return 0;
+}
+
+static int check_mat_ref(uint32_t ref, uint32_t self, int may_be_none)
+{
+	if (ref == SCENE_NONE)
+		return may_be_none;
+	return ref < self;
+}
+
+static int check_shader(const struct scene_shader *sh, uint32_t self)
+{
+	if ((int)sh->kind < 0 || sh->kind > SHADER_TURB3D)
+		return 0;
+	if (sh->kind == SHADER_NONE)
+		return sh->n_fades == 0;
+	if (!finite_pos(sh->size) || !check_mat_ref(sh->mat_a, self, 1) || !check_mat_ref(sh->mat_b, self, 1))
+		return 0;
+	if (!finite_nonneg(sh->tile_width) || !finite_nonneg(sh->grout_width) || sh->terms < 0 ||
+	    sh->terms > LIM_TERMS || !v3_finite(sh->axis_size) || !finite_nonneg(sh->saturation) ||
+	    !isfinite(sh->depth) || !isfinite(sh->variance) || !v3_finite(sh->colour) || !v3_finite(sh->axis))
+		return 0;
+	if (sh->axis_size.x <= 0 || sh->axis_size.y <= 0 || sh->axis_size.z <= 0)
+		return 0;
+	if (sh->kind == SHADER_FADES && v3_len(sh->axis) == 0)
+		return 0;
+	if (sh->n_fades > LIM_FADES_ENTRIES || (sh->n_fades && !sh->fades))
+		return 0;
+	for (uint32_t i = 0; i < sh->n_fades; i++) {
+		const struct fades_entry *e = &sh->fades[i];
+		if (!finite_nonneg(e->dist) || !v3_finite(e->colour))
+			return 0;
+		if (sh->fades_materials ? !check_mat_ref(e->material, self, 0) : e->material != SCENE_NONE)
+			return 0;
+	}
+	return 1;
+}
+
+int scene_add_material(struct scene *s, struct scene_material *m, uint32_t *id, struct scene_error *err)
+{
+	uint32_t self = s->n_materials;
+	int ok = v3_finite(m->diff_colour) && v3_finite(m->spec_colour) && v3_finite(m->tran_colour) &&
+		 isfinite(m->diffuse) && isfinite(m->specular) && finite_nonneg(m->spec_power) &&
+		 isfinite(m->reflection) && isfinite(m->transparency) && finite_pos(m->ior) &&
+		 check_shader(&m->shader, self);
+	if (!ok) {
+		scene_errorf(err, 1, LOCFMT "material has a value out of range", LOCARGS(&m->loc));
+		goto fail;
+	}
+	if (grow((void **)&s->materials, s->n_materials, &s->cap_materials, sizeof *s->materials,
+		 LIM_MATERIALS) < 0) {
+		scene_errorf(err, 1, LOCFMT "too many materials or out of memory", LOCARGS(&m->loc));
+		goto fail;
+	}
+	s->materials[s->n_materials++] = *m;
+	if (id)
+		*id = self;
+	return 0;
+fail:
+	free(m->name);
+	free(m->shader.fades);
+	m->name = NULL;
+	m->shader.fades = NULL;
+	return err ? err->level : 1;
+}
+
+int scene_add_mesh(struct scene *s, struct scene_mesh *mesh, uint32_t *id, struct scene_error *err)
+{
+	int ok = mesh->n_triangles <= LIM_MESH_TRIANGLES && (mesh->n_vertices == 0 || mesh->vertices) &&
+		 (mesh->n_triangles == 0 || mesh->tris) && isfinite(mesh->weld) && mesh->weld >= 0 &&
+		 v3_finite(mesh->rotation) && v3_finite(mesh->at);
+	for (uint64_t i = 0; ok && i < 3ull * mesh->n_triangles; i++)
+		ok = mesh->tris[i] < mesh->n_vertices;
+	for (uint32_t i = 0; ok && i < mesh->n_vertices; i++)
+		ok = v3_finite(mesh->vertices[i]) && (!mesh->normals || v3_finite(mesh->normals[i]));
+	if (!ok) {
+		scene_errorf(err, 1, "%s: error: invalid mesh data", mesh->file ? mesh->file : "<mesh>");
+		goto fail;
+	}
+	if (grow((void **)&s->meshes, s->n_meshes, &s->cap_meshes, sizeof *s->meshes, LIM_MESHES) < 0) {
+		scene_errorf(err, 1, "%s: error: too many meshes or out of memory",
+			     mesh->file ? mesh->file : "<mesh>");
+		goto fail;
+	}
+	if (id)
+		*id = s->n_meshes;
+	s->meshes[s->n_meshes++] = *mesh;
+	memset(mesh, 0, sizeof *mesh);
+	return 0;
+fail:
+	mesh_free_owned(mesh);
+	return err ? err->level : 1;
+}
+
+static int check_xform(const struct scene_object *o)
+{
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 4; j++)
+			if (!isfinite(o->xform.m[i][j]))
+				return 0;
+	mat34 inv;
+	return m34_invert(&o->xform, &inv);
+}
+
+static int check_polygon(const struct prim_polygon *p)
+{
+	if (p->n_contours < 1 || p->n_contours > LIM_POLY_CONTOURS || p->n_points > LIM_POLY_VERTICES ||
+	    !p->contour_start || !p->points)
+		return 0;
+	if (p->contour_start[0] != 0 || p->contour_start[p->n_contours] != p->n_points)
+		return 0;
+	for (uint32_t i = 0; i < p->n_contours; i++)
+		if (p->contour_start[i + 1] < p->contour_start[i] + 3)
+			return 0;
+	for (uint32_t i = 0; i < p->n_points; i++)
+		if (!v3_finite(p->points[i]))
+			return 0;
+	return 1;
+}
+
+int scene_add_object(struct scene *s, struct scene_object *o, uint32_t *id, struct scene_error *err)
+{
+	uint32_t self = s->n_objects;
+	int ok = (int)o->kind >= 0 && o->kind < PRIM_KIND_COUNT && check_xform(o) &&
+		 (o->material == SCENE_NONE || o->material < s->n_materials);
+	const char *why = "a value out of range";
+	if (ok) {
+		switch (o->kind) {
+		case PRIM_SPHERE:
+			ok = check_sphere(&o->u.sphere);
+			break;
+		case PRIM_PLANE:
+		case PRIM_DISK:
+			ok = v3_finite(o->u.plane.position) && v3_finite(o->u.plane.normal) &&
+			     v3_len(o->u.plane.normal) > 0 && v3_finite(o->u.plane.x_axis) &&
+			     v3_finite(o->u.plane.y_axis) && (o->kind == PRIM_PLANE || finite_pos(o->u.plane.radius));
+			break;
+		case PRIM_CYLINDER:
+			ok = check_cylinder(&o->u.cylinder);
+			break;
+		case PRIM_BOX:
+			ok = check_box(&o->u.box);
+			break;
+		case PRIM_TRIANGLE: {
+			const struct prim_triangle *t = &o->u.triangle;
+			ok = v3_finite(t->a) && v3_finite(t->b) && v3_finite(t->c) &&
+			     (!t->has_normals || (v3_finite(t->na) && v3_finite(t->nb) && v3_finite(t->nc)));
+			break;
+		}
+		case PRIM_RAW:
+			ok = o->u.raw.mesh < s->n_meshes;
+			why = "an unknown mesh";
+			break;
+		case PRIM_CSG:
+			ok = o->u.csg.operand1 < self && o->u.csg.operand2 < self &&
+			     o->u.csg.operand1 != o->u.csg.operand2 && (int)o->u.csg.op >= 0 &&
+			     o->u.csg.op <= CSG_SUBTRACT;
+			why = "invalid operands";
+			break;
+		case PRIM_POLYGON:
+			ok = check_polygon(&o->u.polygon);
+			why = "an invalid contour list (each contour needs 3 or more points)";
+			break;
+		case PRIM_INSTANCE:
+			ok = o->u.instance.define < s->n_defines;
+			why = "an undefined complex object";
+			break;
+		default:
+			ok = 0;
+		}
+	}
+	if (!ok) {
+		scene_errorf(err, 1, LOCFMT "%s object has %s", LOCARGS(&o->loc), scene_prim_name(o->kind), why);
+		goto fail;
+	}
+	if (grow((void **)&s->objects, s->n_objects, &s->cap_objects, sizeof *s->objects, LIM_OBJECTS) < 0) {
+		scene_errorf(err, 1, LOCFMT "too many objects or out of memory", LOCARGS(&o->loc));
+		goto fail;
+	}
+	s->objects[s->n_objects++] = *o;
+	if (o->kind == PRIM_POLYGON)
+		o->u.polygon.points = NULL, o->u.polygon.contour_start = NULL;
+	if (id)
+		*id = self;
+	return 0;
+fail:
+	object_free_owned(o);
+	return err ? err->level : 1;
+}
+
+int scene_add_define(struct scene *s, struct scene_define *d, uint32_t *id, struct scene_error *err)
+{
+	int ok = d->name && d->name[0] && (d->n_objects == 0 || d->objects);
+	for (uint32_t i = 0; ok && i < d->n_objects; i++)
+		ok = d->objects[i] < s->n_objects;
+	if (!ok) {
+		scene_errorf(err, 1, LOCFMT "invalid definition", LOCARGS(&d->loc));
+		goto fail;
+	}
+	if (grow((void **)&s->defines, s->n_defines, &s->cap_defines, sizeof *s->defines, LIM_DEFINES) < 0) {
+		scene_errorf(err, 1, LOCFMT "too many definitions or out of memory", LOCARGS(&d->loc));
+		goto fail;
+	}
+	if (id)
+		*id = s->n_defines;
+	s->defines[s->n_defines++] = *d;
+	d->name = NULL;
+	d->objects = NULL;
+	return 0;
+fail:
+	free(d->name);
+	free(d->objects);
+	d->name = NULL;
+	d->objects = NULL;
+	return err ? err->level : 1;
+}
+
+int scene_add_root(struct scene *s, uint32_t object, struct scene_error *err)
+{
+	if (object >= s->n_objects)
+		return scene_errorf(err, 1, "error: root object %u does not exist", object);
+	if (grow((void **)&s->roots, s->n_roots, &s->cap_roots, sizeof *s->roots, LIM_OBJECTS) < 0)
+		return scene_errorf(err, 1, "error: too many objects or out of memory");
+	s->roots[s->n_roots++] = object;
+	return 0;
+}
+
+uint32_t scene_find_material(const struct scene *s, const char *name)
+{
+	for (uint32_t i = s->n_materials; i-- > 0;)
+		if (s->materials[i].name && strcasecmp(s->materials[i].name, name) == 0)
+			return i;
+	return SCENE_NONE;
+}
+
+uint32_t scene_find_define(const struct scene *s, const char *name)
+{
+	for (uint32_t i = s->n_defines; i-- > 0;)
+		if (strcasecmp(s->defines[i].name, name) == 0)
+			return i;
+	return SCENE_NONE;
+}
+
+/* ---- statistics and names ------------------------------------------------------- */
+
+/* Triangles drawn by object i, through instances; memo caches per-define counts. */
+static uint64_t object_tris(const struct scene *s, uint32_t i, uint64_t *memo)
+{
+	const struct scene_object *o = &s->objects[i];
+	switch (o->kind) {
+	case PRIM_TRIANGLE:
+		return 1;
+	case PRIM_RAW:
+		return s->meshes[o->u.raw.mesh].n_triangles;
+	case PRIM_CSG:
+		return object_tris(s, o->u.csg.operand1, memo) + object_tris(s, o->u.csg.operand2, memo);
+	case PRIM_INSTANCE: {
+		uint32_t d = o->u.instance.define;
+		if (memo[d] == UINT64_MAX) {
+			uint64_t n = 0;
+			for (uint32_t k = 0; k < s->defines[d].n_objects; k++)
+				n += object_tris(s, s->defines[d].objects[k], memo);
+			memo[d] = n;
+		}
+		return memo[d];
+	}
+	default:
+		return 0;
+	}
+}
+
+void scene_stats(const struct scene *s, struct scene_stats *st)
+{
+	memset(st, 0, sizeof *st);
+	for (uint32_t i = 0; i < s->n_objects; i++)
+		st->by_kind[s->objects[i].kind]++;
+	for (uint32_t i = 0; i < s->n_meshes; i++)
+		st->triangles += s->meshes[i].n_triangles;
+	st->triangles += st->by_kind[PRIM_TRIANGLE];
+	for (uint32_t i = 0; i < s->n_materials; i++) {
+		if (s->materials[i].name)
+			st->materials_named++;
+		else
+			st->materials_anon++;
+	}
+	uint64_t *memo = malloc((s->n_defines ? s->n_defines : 1) * sizeof *memo);
+	if (memo) {
+		for (uint32_t i = 0; i < s->n_defines; i++)
+			memo[i] = UINT64_MAX;
+		for (uint32_t i = 0; i < s->n_roots; i++)
+			st->triangles_instanced += object_tris(s, s->roots[i], memo);
+		free(memo);
+	}
+}
+
+const char *scene_prim_name(enum prim_kind k)
+{
+	static const char *const names[] = { "sphere", "plane", "cylinder", "box", "triangle",
+					     "raw", "csg", "disk", "polygon", "instance" };
+	return (unsigned)k < PRIM_KIND_COUNT ? names[k] : "?";
+}
+
+const char *scene_filter_name(enum filter_kind k)
+{
+	static const char *const names[] = { "standard", "adaptive", "super-sample", "disk", "lens" };
+	return (unsigned)k <= FILTER_LENS ? names[k] : "?";
+}
+
+const char *scene_shader_name(enum shader_kind k)
+{
+	static const char *const names[] = { "none", "bricks", "tiles", "chequers",
+					     "bumpy", "noise", "fades", "turb3d" };
+	return (unsigned)k <= SHADER_TURB3D ? names[k] : "?";
+}
+
+int scene_xform_op(mat34 *m, enum xform_op op, int axis, double amount, vec3 v)
+{
+	mat34 t = m34_identity();
+	switch (op) {
+	case XF_SHRINK:
+	case XF_STRETCH: {
+		if (!isfinite(amount) || amount == 0 || axis < 0 || axis > 2)
+			return 0;
+		double f = op == XF_STRETCH ? amount : 1.0 / amount;
+		t.m[axis][axis] = f;
+		break;
+	}
+	case XF_TRANSLATE:
+		if (!v3_finite(v))
+			return 0;
+		t.m[0][3] = v.x;
+		t.m[1][3] = v.y;
+		t.m[2][3] = v.z;
+		break;
+	case XF_ROTATE: {
+		if (!isfinite(amount) || axis < 0 || axis > 2)
+			return 0;
+		/* right-handed: positive angles turn y toward z (x-rotate), z toward x
+		 * (y-rotate), x toward y (z-rotate) */
+		double a = amount * (M_PI / 180.0), c = cos(a), sn = sin(a);
+		int i = (axis + 1) % 3, j = (axis + 2) % 3;
+		t.m[i][i] = c;
+		t.m[i][j] = -sn;
+		t.m[j][i] = sn;
+		t.m[j][j] = c;
+		break;
+	}
+	default:
+		return 0;
+	}
+	*m = m34_mul(&t, m); /* written order: the new op applies after the earlier ones */
+	return 1;
+}

@@ -1,0 +1,129 @@
+/*
+ * main.c - portray-master: command line parsing and dispatch.
+ */
+#include <errno.h>
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "master/master.h"
+
+static void usage(FILE *f)
+{
+	fprintf(f,
+		"Usage: portray-master [OPTION]... [-c CAMERA] SCENE\n"
+		"Render a PortRAY scene, locally on all cores or on a farm of portray-worker daemons.\n"
+		"\n"
+		"  -c, --camera FILE        camera file (camera, image and light statements)\n"
+		"  -o, --output FILE        output image, .png or .ppm (default: SCENE with .png)\n"
+		"      --check              parse the scene, print a summary, exit with its error level\n"
+		"  -j, --threads N          local threads (default: all cores)\n"
+		"      --tile N             tile side in pixels (default 32)\n"
+		"      --size WxH           override the image statement's size\n"
+		"  -q, --quiet              no progress bar or summary\n"
+		"  -w, --workers LIST       HOST:PORT[,HOST:PORT...] of portray-worker daemons\n"
+		"      --workers-file FILE  one HOST:PORT per line ('#' comments)\n"
+		"      --secret-file FILE   shared secret for the worker handshake\n"
+		"      --no-local           do not trace on this machine, workers only\n"
+		"      --heartbeat-timeout S  drop a worker silent for S seconds (default 10)\n"
+		"  -h, --help               show this help\n"
+		"  -V, --version            show the version\n"
+		"\n"
+		"Exit status: 0 success; 1 and 2 the PortRAY manual's error levels (Appendix B);\n"
+		"64 usage; 69 no worker left with --no-local; 74 output not written.\n");
+}
+
+static int parse_uint(const char *s, unsigned long max, unsigned long *out)
+{
+	char *end;
+	errno = 0;
+	unsigned long v = strtoul(s, &end, 10);
+	if (errno || end == s || *end || v > max || s[0] == '-')
+		return -1;
+	*out = v;
+	return 0;
+}
+
+enum { OPT_CHECK = 256, OPT_TILE, OPT_SIZE, OPT_WFILE, OPT_SECRET, OPT_NOLOCAL, OPT_HB };
+
+int main(int argc, char **argv)
+{
+	static const struct option longopts[] = {
+		{ "camera", required_argument, NULL, 'c' },
+		{ "output", required_argument, NULL, 'o' },
+		{ "check", no_argument, NULL, OPT_CHECK },
+		{ "threads", required_argument, NULL, 'j' },
+		{ "tile", required_argument, NULL, OPT_TILE },
+		{ "size", required_argument, NULL, OPT_SIZE },
+		{ "quiet", no_argument, NULL, 'q' },
+		{ "workers", required_argument, NULL, 'w' },
+		{ "workers-file", required_argument, NULL, OPT_WFILE },
+		{ "secret-file", required_argument, NULL, OPT_SECRET },
+		{ "no-local", no_argument, NULL, OPT_NOLOCAL },
+		{ "heartbeat-timeout", required_argument, NULL, OPT_HB },
+		{ "help", no_argument, NULL, 'h' },
+		{ "version", no_argument, NULL, 'V' },
+		{ NULL, 0, NULL, 0 },
+	};
+	struct master_opts o = { .tile = 32, .heartbeat_s = 10.0 };
+	unsigned long v;
+	int c;
+	while ((c = getopt_long(argc, argv, "c:o:j:qw:hV", longopts, NULL)) != -1) {
+		switch (c) {
+		case 'c': o.camera = optarg; break;
+		case 'o': o.out = optarg; break;
+		case OPT_CHECK: o.check = true; break;
+		case 'j':
+			if (parse_uint(optarg, 4096, &v) < 0) {
+				fprintf(stderr, "portray-master: -j wants a number 0..4096, not '%s'\n", optarg);
+				return EXIT_USAGE;
+			}
+			o.threads = (int)v;
+			break;
+		case OPT_TILE:
+			if (parse_uint(optarg, 4096, &v) < 0 || v == 0) {
+				fprintf(stderr, "portray-master: --tile wants a number 1..4096, not '%s'\n", optarg);
+				return EXIT_USAGE;
+			}
+			o.tile = (uint32_t)v;
+			break;
+		case OPT_SIZE: {
+			unsigned w, h;
+			char extra;
+			if (sscanf(optarg, "%ux%u%c", &w, &h, &extra) != 2 || w == 0 || h == 0 || w > 65536 ||
+			    h > 65536) {
+				fprintf(stderr, "portray-master: --size wants WxH (e.g. 640x480), not '%s'\n", optarg);
+				return EXIT_USAGE;
+			}
+			o.width = w;
+			o.height = h;
+			break;
+		}
+		case 'q': o.quiet = true; break;
+		case 'w': o.workers = optarg; break;
+		case OPT_WFILE: o.workers_file = optarg; break;
+		case OPT_SECRET: o.secret_file = optarg; break;
+		case OPT_NOLOCAL: o.no_local = true; break;
+		case OPT_HB: {
+			char *end;
+			o.heartbeat_s = strtod(optarg, &end);
+			if (*end || !(o.heartbeat_s > 0 && o.heartbeat_s < 86400)) {
+				fprintf(stderr, "portray-master: --heartbeat-timeout wants seconds, not '%s'\n", optarg);
+				return EXIT_USAGE;
+			}
+			break;
+		}
+		case 'h': usage(stdout); return 0;
+		case 'V': printf("portray-master %s (PortRAY 0.11 scene language)\n", PORTRAY_VERSION); return 0;
+		default: usage(stderr); return EXIT_USAGE;
+		}
+	}
+	if (optind != argc - 1) {
+		fprintf(stderr, "portray-master: %s\n", optind >= argc ? "no scene file given" : "one scene file, please");
+		usage(stderr);
+		return EXIT_USAGE;
+	}
+	o.scene = argv[optind];
+	return o.check ? master_check(&o) : master_render(&o);
+}

@@ -1,0 +1,39 @@
+/*
+ * master.h - the portray-master command: options shared by every mode.
+ */
+#ifndef PORTRAY_MASTER_H
+#define PORTRAY_MASTER_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+/* Exit codes beyond the manual's Appendix B levels (0, 1, 2). */
+enum {
+	EXIT_USAGE = 64,      /* bad command line (sysexits EX_USAGE) */
+	EXIT_IO = 74,         /* could not write the output image (EX_IOERR) */
+	EXIT_NO_WORKERS = 69, /* --no-local and every worker lost (EX_UNAVAILABLE) */
+	EXIT_INTERRUPTED = 130 /* never used for a finished partial render */
+};
+
+struct master_opts {
+	const char *camera;    /* -c FILE, may be NULL */
+	const char *scene;     /* SCENE */
+	const char *out;       /* -o FILE, default: scene name with .png */
+	bool check;            /* --check: parse and summarise only */
+	int threads;           /* -j N, 0 = all cores */
+	uint32_t tile;         /* --tile N, default 32 */
+	uint32_t width, height; /* --size WxH, 0 = from the image statement */
+	bool quiet;            /* -q */
+	const char *workers;   /* -w HOST:PORT[,HOST:PORT...] */
+	const char *workers_file; /* --workers-file F */
+	const char *secret_file;  /* --secret-file F */
+	bool no_local;         /* --no-local */
+	double heartbeat_s;    /* --heartbeat-timeout S (farm) */
+};
+
+/* master/check.c: parse everything, print the summary, return the error level. */
+int master_check(const struct master_opts *o);
+/* master/render.c: load, render (locally or on the farm), write; exit code. */
+int master_render(const struct master_opts *o);
+
+#endif
