@@ -28,7 +28,8 @@ struct hit {
 	vec3 ng;           /* world geometric normal, unit, same side as n */
 	vec3 mp;           /* the point in the object space of the object that owns the
 			      material (type I shaders: textures move with objects) */
-	double u, v;       /* surface mapping in [0,1) where natural (type II shaders) */
+	double u, v;       /* surface mapping in object-space length units (type II
+			      shaders; docs/rendering.md gives each primitive's mapping) */
 	uint32_t material; /* resolved material index, SCENE_NONE = default material */
 	uint32_t object;   /* index of the leaf object hit (scene.objects) */
 };
