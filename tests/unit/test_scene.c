@@ -1,0 +1,194 @@
+/*
+ * test_scene.c - the scene model: defaults, builder validation, ownership,
+ * transform composition and rotation sense.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/scene.h"
+#include "tests/unit/check.h"
+
+static void test_defaults(void)
+{
+	struct scene *s = scene_new();
+	CHECK(s != NULL);
+	CHECK(s->image.xsize == 320 && s->image.ysize == 240);
+	CHECK(s->camera.n_filters == 1 && s->camera.filters[0].kind == FILTER_STANDARD);
+	const struct scene_material *m = scene_default_material();
+	CHECK(m->diffuse == 1.0 && m->specular == 0.0 && m->transparency == 0.0);
+	CHECK(m->diff_colour.x == 1 && m->diff_colour.y == 1 && m->diff_colour.z == 1);
+	struct scene_filter f;
+	scene_filter_defaults(&f, FILTER_LENS);
+	CHECK(f.radius == 0.1 && f.focal_length == 1000.0 && f.samples == 4);
+	scene_filter_defaults(&f, FILTER_DISK);
+	CHECK(f.radius == 0.707 && f.samples == 4);
+	scene_filter_defaults(&f, FILTER_ADAPTIVE);
+	CHECK(f.threshold == 0.2 && f.max_depth == 3 && f.cache_size == 1000 && f.relax == 1.2);
+	scene_free(s);
+}
+
+static void test_xform(void)
+{
+	mat34 m = m34_identity();
+	/* z-rotate 90 turns x toward y */
+	CHECK(scene_xform_op(&m, XF_ROTATE, 2, 90, v3(0, 0, 0)));
+	vec3 p = m34_point(&m, v3(1, 0, 0));
+	CHECK_NEAR(p.x, 0, 1e-12);
+	CHECK_NEAR(p.y, 1, 1e-12);
+	/* then translate: applied after the rotation (written order) */
+	CHECK(scene_xform_op(&m, XF_TRANSLATE, 0, 0, v3(5, 0, 0)));
+	p = m34_point(&m, v3(1, 0, 0));
+	CHECK_NEAR(p.x, 5, 1e-12);
+	CHECK_NEAR(p.y, 1, 1e-12);
+	/* x-rotate turns y toward z, y-rotate turns z toward x */
+	mat34 a = m34_identity();
+	CHECK(scene_xform_op(&a, XF_ROTATE, 0, 90, v3(0, 0, 0)));
+	p = m34_point(&a, v3(0, 1, 0));
+	CHECK_NEAR(p.z, 1, 1e-12);
+	mat34 b = m34_identity();
+	CHECK(scene_xform_op(&b, XF_ROTATE, 1, 90, v3(0, 0, 0)));
+	p = m34_point(&b, v3(0, 0, 1));
+	CHECK_NEAR(p.x, 1, 1e-12);
+	/* shrink divides, stretch multiplies; 0 is refused */
+	mat34 c = m34_identity();
+	CHECK(scene_xform_op(&c, XF_SHRINK, 0, 4, v3(0, 0, 0)));
+	CHECK(scene_xform_op(&c, XF_STRETCH, 1, 3, v3(0, 0, 0)));
+	p = m34_point(&c, v3(1, 1, 1));
+	CHECK_NEAR(p.x, 0.25, 1e-15);
+	CHECK_NEAR(p.y, 3, 1e-15);
+	CHECK(!scene_xform_op(&c, XF_SHRINK, 0, 0, v3(0, 0, 0)));
+	/* inverse */
+	mat34 inv;
+	CHECK(m34_invert(&m, &inv));
+	vec3 q = m34_point(&inv, m34_point(&m, v3(0.3, -2, 7)));
+	CHECK_NEAR(q.x, 0.3, 1e-12);
+	CHECK_NEAR(q.y, -2, 1e-12);
+	CHECK_NEAR(q.z, 7, 1e-12);
+}
+
+static void test_builder(void)
+{
+	struct scene *s = scene_new();
+	struct scene_error err;
+	struct scene_material m;
+	uint32_t mid, a, b, c, d;
+	scene_material_defaults(&m);
+	m.name = strdup("Flat-Red");
+	CHECK(scene_add_material(s, &m, &mid, &err) == 0);
+	CHECK(scene_find_material(s, "flat-red") == mid);
+	CHECK(scene_find_material(s, "nothing") == SCENE_NONE);
+
+	/* a shader referencing a material not yet defined is refused (acyclic) */
+	scene_material_defaults(&m);
+	scene_shader_defaults(&m.shader, SHADER_CHEQUERS);
+	m.shader.mat_a = 5;
+	CHECK(scene_add_material(s, &m, NULL, &err) == 1);
+
+	struct scene_object o;
+	scene_object_defaults(&o, PRIM_SPHERE);
+	CHECK(scene_add_object(s, &o, &a, &err) == 0);
+	scene_object_defaults(&o, PRIM_BOX);
+	o.material = mid;
+	CHECK(scene_add_object(s, &o, &b, &err) == 0);
+	scene_object_defaults(&o, PRIM_CSG);
+	o.u.csg.operand1 = a;
+	o.u.csg.operand2 = b;
+	CHECK(scene_add_object(s, &o, &c, &err) == 0);
+	/* forward references are refused */
+	o.u.csg.operand2 = c + 1;
+	CHECK(scene_add_object(s, &o, NULL, &err) == 1);
+	/* negative radius refused, message names the location */
+	scene_object_defaults(&o, PRIM_SPHERE);
+	o.u.sphere.radius = -1;
+	o.loc.file = "x.sce";
+	o.loc.line = 3;
+	o.loc.col = 5;
+	CHECK(scene_add_object(s, &o, NULL, &err) == 1);
+	CHECK(strstr(err.msg, "x.sce:3:5: error:") != NULL);
+
+	struct scene_define def = { 0 };
+	def.name = strdup("athing");
+	def.objects = malloc(sizeof *def.objects);
+	def.objects[0] = c;
+	def.n_objects = 1;
+	CHECK(scene_add_define(s, &def, &d, &err) == 0);
+	CHECK(def.name == NULL && def.objects == NULL); /* ownership moved */
+	CHECK(scene_find_define(s, "ATHING") == d);
+	scene_object_defaults(&o, PRIM_INSTANCE);
+	o.u.instance.define = d;
+	uint32_t inst;
+	CHECK(scene_add_object(s, &o, &inst, &err) == 0);
+	CHECK(scene_add_root(s, inst, &err) == 0);
+	CHECK(scene_add_root(s, inst, &err) == 0);
+	CHECK(scene_add_root(s, 999, &err) == 1);
+
+	/* polygon ownership: moved on success, freed on failure */
+	scene_object_defaults(&o, PRIM_POLYGON);
+	o.u.polygon.n_contours = 1;
+	o.u.polygon.n_points = 2; /* too few: refused, arrays freed by the builder */
+	o.u.polygon.contour_start = calloc(2, sizeof(uint32_t));
+	o.u.polygon.contour_start[1] = 2;
+	o.u.polygon.points = calloc(2, sizeof(vec3));
+	CHECK(scene_add_object(s, &o, NULL, &err) == 1);
+
+	struct scene_stats st;
+	scene_stats(s, &st);
+	CHECK(st.by_kind[PRIM_SPHERE] == 1 && st.by_kind[PRIM_CSG] == 1 && st.by_kind[PRIM_INSTANCE] == 1);
+	CHECK(st.materials_named == 1);
+	scene_free(s);
+	scene_free(NULL);
+}
+
+static void test_mesh_stats(void)
+{
+	struct scene *s = scene_new();
+	struct scene_error err;
+	struct scene_mesh mesh = { 0 };
+	mesh.file = strdup("t.raw");
+	mesh.n_vertices = 3;
+	mesh.n_triangles = 1;
+	mesh.vertices = calloc(3, sizeof(vec3));
+	mesh.tris = calloc(3, sizeof(uint32_t));
+	mesh.tris[1] = 1;
+	mesh.tris[2] = 2;
+	uint32_t id, obj, def, inst;
+	CHECK(scene_add_mesh(s, &mesh, &id, &err) == 0);
+	struct scene_object o;
+	scene_object_defaults(&o, PRIM_RAW);
+	o.u.raw.mesh = id;
+	CHECK(scene_add_object(s, &o, &obj, &err) == 0);
+	struct scene_define d = { 0 };
+	d.name = strdup("tri");
+	d.objects = malloc(sizeof(uint32_t));
+	d.objects[0] = obj;
+	d.n_objects = 1;
+	CHECK(scene_add_define(s, &d, &def, &err) == 0);
+	for (int i = 0; i < 5; i++) {
+		scene_object_defaults(&o, PRIM_INSTANCE);
+		o.u.instance.define = def;
+		CHECK(scene_add_object(s, &o, &inst, &err) == 0);
+		CHECK(scene_add_root(s, inst, &err) == 0);
+	}
+	struct scene_stats st;
+	scene_stats(s, &st);
+	CHECK(st.triangles == 1);
+	CHECK(st.triangles_instanced == 5);
+	/* a mesh index out of range is refused */
+	struct scene_mesh bad = { 0 };
+	bad.n_vertices = 1;
+	bad.n_triangles = 1;
+	bad.vertices = calloc(1, sizeof(vec3));
+	bad.tris = calloc(3, sizeof(uint32_t));
+	bad.tris[2] = 7;
+	CHECK(scene_add_mesh(s, &bad, NULL, &err) == 1);
+	scene_free(s);
+}
+
+int main(void)
+{
+	test_defaults();
+	test_xform();
+	test_builder();
+	test_mesh_stats();
+	TEST_MAIN_END();
+}
