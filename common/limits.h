@@ -18,6 +18,9 @@
 #define LIM_RAW_BYTES (2048ull * 1024 * 1024)
 /* triangles in one RAW mesh: indices are uint32 */
 #define LIM_MESH_TRIANGLES (64u * 1024 * 1024)
+/* largest RAW coordinate magnitude: keeps edge cross products and squared
+ * distances finite (no real model comes near it) */
+#define LIM_RAW_COORD 1e100
 /* objects (every primitive, CSG node and instance) in one scene */
 #define LIM_OBJECTS (64u * 1024 * 1024)
 /* named materials, definitions, lights, meshes */
