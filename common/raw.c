@@ -418,14 +418,11 @@ static vec3 *raw_normals(const vec3 *v, uint32_t nv, const uint32_t *t, uint32_t
 /* Rz * Ry * Rx (degrees) followed by +at, exactly as scene_xform_op builds them. */
 static mat34 raw_matrix(vec3 rot, vec3 at)
 {
-	mat34 m = m34_identity(), r;
+	mat34 m = m34_identity();
 	double ang[3] = { rot.x, rot.y, rot.z };
-	for (int axis = 0; axis < 3; axis++) {
-		if (ang[axis] == 0)
-			continue;
-		scene_xform_op(&r, XF_ROTATE, axis, ang[axis], v3(0, 0, 0));
-		m = m34_mul(&r, &m);
-	}
+	for (int axis = 0; axis < 3; axis++)
+		if (ang[axis] != 0)
+			scene_xform_op(&m, XF_ROTATE, axis, ang[axis], v3(0, 0, 0)); /* m = R m */
 	m.m[0][3] += at.x;
 	m.m[1][3] += at.y;
 	m.m[2][3] += at.z;
