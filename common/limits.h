@@ -49,5 +49,12 @@
 #define LIM_IMAGE_PIXELS (256ull * 1024 * 1024)
 /* shader terms (bumpy, turb3d octaves) */
 #define LIM_TERMS 32
+/* reflection/refraction recursion: past 10 bounces a ray's weight is below
+ * what an 8-bit pixel shows in any sane scene (the weight cut-off stops most
+ * paths much earlier) */
+#define LIM_TRACE_DEPTH 10
+/* surfaces a shadow ray walks through (transparent objects) before the
+ * light counts as blocked: bounds the work per shadow ray */
+#define LIM_SHADOW_HITS 64
 
 #endif
