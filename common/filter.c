@@ -1,0 +1,340 @@
+/*
+ * filter.c - the camera's filters layered in the order written (filter.h,
+ * docs/camera.md).
+ */
+#include "common/filter.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/rng.h"
+
+/* Purpose tag for the filters' own random numbers (the layer index is added),
+ * so they never coincide with the streams shading derives from the seed. */
+#define FILTER_RNG_TAG 0x46494c5445520000ull
+
+static int is_base(enum filter_kind k) { return k == FILTER_STANDARD || k == FILTER_ADAPTIVE; }
+
+/* Index of the first standard/adaptive filter, or -1. */
+static int base_index(const struct scene_camera *sc)
+{
+	for (int i = 0; i < sc->n_filters; i++)
+		if (is_base(sc->filters[i].kind))
+			return i;
+	return -1;
+}
+
+int filter_chain_init(struct filter_chain *fc, const struct scene_camera *sc,
+		      const struct scene_image *im, uint32_t w, uint32_t h)
+{
+	memset(fc, 0, sizeof *fc);
+	if (cam_init(&fc->cam, sc, w, h) < 0)
+		return -1;
+	int b = base_index(sc);
+	if (b < 0) {
+		scene_filter_defaults(&fc->base, FILTER_STANDARD);
+		return 0;
+	}
+	fc->base = sc->filters[b];
+	for (int i = b + 1; i < sc->n_filters && i < LIM_FILTERS; i++) {
+		const struct scene_filter *f = &sc->filters[i];
+		if (f->kind == FILTER_SUPERSAMPLE || f->kind == FILTER_DISK || f->kind == FILTER_LENS)
+			fc->layers[fc->n_layers++] = *f;
+	}
+	if (fc->base.kind == FILTER_ADAPTIVE) {
+		if (fc->base.max_depth < 0)
+			fc->base.max_depth = 0;
+		if (fc->base.max_depth > LIM_ADAPTIVE_DEPTH)
+			fc->base.max_depth = LIM_ADAPTIVE_DEPTH;
+		fc->cache_size = fc->base.cache_size > 0 ? fc->base.cache_size : im->intersect_buffer;
+		if (fc->cache_size < 0)
+			fc->cache_size = 0;
+	}
+	return 0;
+}
+
+/* Appends printf-style text to buf at *len without overflowing n. */
+static void append(char *buf, size_t n, size_t *len, const char *fmt, ...)
+	__attribute__((format(printf, 4, 5)));
+static void append(char *buf, size_t n, size_t *len, const char *fmt, ...)
+{
+	if (*len + 1 >= n)
+		return;
+	va_list ap;
+	va_start(ap, fmt);
+	int k = vsnprintf(buf + *len, n - *len, fmt, ap);
+	va_end(ap);
+	if (k > 0)
+		*len = *len + (size_t)k < n ? *len + (size_t)k : n - 1;
+}
+
+int filter_warnings(const struct scene_camera *sc, char *buf, size_t n)
+{
+	size_t len = 0;
+	int count = 0;
+	if (n)
+		buf[0] = '\0';
+	int b = base_index(sc);
+	for (int i = 0; i < sc->n_filters; i++) {
+		const struct scene_filter *f = &sc->filters[i];
+		const char *why = NULL;
+		if (b < 0)
+			why = "there is no standard or adaptive filter";
+		else if (i < b)
+			why = "it comes before the first standard or adaptive filter";
+		else if (i > b && f->kind == FILTER_ADAPTIVE)
+			why = "only the first standard or adaptive filter samples the pixel";
+		if (!why)
+			continue;
+		count++;
+		append(buf, n, &len, "%s:%d:%d: warning: filter %s ignored: %s\n",
+		       f->loc.file ? f->loc.file : "<scene>", f->loc.line, f->loc.col,
+		       scene_filter_name(f->kind), why);
+	}
+	if (b < 0 && sc->n_filters > 0)
+		append(buf, n, &len, "%s:%d:%d: warning: using filter standard\n",
+		       sc->loc.file ? sc->loc.file : "<scene>", sc->loc.line, sc->loc.col);
+	return count;
+}
+
+static uint64_t sat_mul(uint64_t a, uint64_t b)
+{
+	if (a && b > UINT64_MAX / a)
+		return UINT64_MAX;
+	return a * b;
+}
+
+/* Samples one layer multiplies each incoming sample into. */
+static uint64_t layer_count(const struct scene_filter *f)
+{
+	switch (f->kind) {
+	case FILTER_SUPERSAMPLE: return (uint64_t)f->x_samples * (uint64_t)f->y_samples;
+	case FILTER_DISK:
+	case FILTER_LENS: return (uint64_t)f->samples;
+	default: return 1;
+	}
+}
+
+uint64_t filter_rays_per_sample(const struct filter_chain *fc)
+{
+	uint64_t n = 1;
+	for (int i = 0; i < fc->n_layers; i++)
+		n = sat_mul(n, layer_count(&fc->layers[i]));
+	return n;
+}
+
+/* ---- layered samples ---------------------------------------------------- */
+
+/* The state one layer passes to the next. */
+struct sample {
+	double px, py;     /* continuous pixel position */
+	double lu, lv;     /* aperture point (world units along right, down) */
+	double focal;      /* focal distance, when lens */
+	int lens;          /* a lens layer has chosen an aperture point */
+	uint64_t s;        /* sample index so far (mixed radix over the layers) */
+};
+
+struct walk {
+	const struct filter_chain *fc;
+	uint32_t sx, sy;   /* seed position */
+	filter_trace_fn fn;
+	void *arg;
+	uint64_t rays;
+};
+
+static uint64_t seed_of(uint32_t x, uint32_t y, uint64_t s)
+{
+	uint64_t seed = rng_seed(x, y, (uint32_t)s);
+	return (s >> 32) ? rng_derive(seed, s >> 32) : seed;
+}
+
+/* Colour of sample smp after layers [layer, n_layers) have multiplied it. */
+static vec3 expand(struct walk *w, int layer, struct sample smp)
+{
+	const struct filter_chain *fc = w->fc;
+	if (layer == fc->n_layers) {
+		struct ray r = smp.lens ? cam_lens_ray(&fc->cam, smp.px, smp.py, smp.lu, smp.lv, smp.focal)
+					: cam_ray(&fc->cam, smp.px, smp.py);
+		w->rays++;
+		return w->fn(w->arg, &r, seed_of(w->sx, w->sy, smp.s));
+	}
+	const struct scene_filter *f = &fc->layers[layer];
+	uint64_t n = layer_count(f);
+	vec3 sum = v3(0, 0, 0);
+	double wsum = 0;
+	for (uint64_t k = 0; k < n; k++) {
+		struct sample c = smp;
+		c.s = smp.s * n + k;
+		double weight = 1.0;
+		if (f->kind == FILTER_SUPERSAMPLE) {
+			uint64_t a = k % (uint64_t)f->x_samples, b = k / (uint64_t)f->x_samples;
+			c.px += ((double)a + 0.5) / f->x_samples - 0.5;
+			c.py += ((double)b + 0.5) / f->y_samples - 0.5;
+		} else {
+			/* uniform point in a disk of radius R: r = R sqrt(u1), angle 2 pi u2 */
+			uint64_t rs = rng_derive(seed_of(w->sx, w->sy, c.s), FILTER_RNG_TAG + (uint64_t)layer);
+			double u1 = rng_uniform(rs, 0), u2 = rng_uniform(rs, 1);
+			double rr = f->radius * sqrt(u1), phi = 2.0 * M_PI * u2;
+			double du = rr * cos(phi), dv = rr * sin(phi);
+			if (f->kind == FILTER_DISK) {
+				c.px += du;
+				c.py += dv;
+				weight = f->radius > 0 ? 1.0 - rr / f->radius : 1.0;
+			} else {
+				c.lu = du;
+				c.lv = dv;
+				c.focal = f->focal_length;
+				c.lens = 1;
+			}
+		}
+		vec3 v = expand(w, layer + 1, c);
+		sum = v3_add(sum, v3_scale(v, weight));
+		wsum += weight;
+	}
+	return wsum > 0 ? v3_scale(sum, 1.0 / wsum) : v3(0, 0, 0);
+}
+
+vec3 filter_point(const struct filter_chain *fc, double px, double py, uint32_t sx, uint32_t sy,
+		  filter_trace_fn fn, void *arg, uint64_t *rays)
+{
+	struct walk w = { fc, sx, sy, fn, arg, 0 };
+	struct sample smp = { px, py, 0, 0, 0, 0, 0 };
+	vec3 v = expand(&w, 0, smp);
+	if (rays)
+		*rays += w.rays;
+	return v;
+}
+
+/* ---- adaptive ------------------------------------------------------------ */
+
+/* One corner cache entry: a corner on the sub-pixel grid and its colour. */
+struct corner {
+	uint32_t x, y;
+	vec3 c;
+	int used;
+};
+
+struct filter_scratch {
+	struct corner *cache;
+	uint32_t n;
+};
+
+struct filter_scratch *filter_scratch_new(const struct filter_chain *fc)
+{
+	struct filter_scratch *sc = calloc(1, sizeof *sc);
+	if (!sc)
+		return NULL;
+	if (fc->base.kind == FILTER_ADAPTIVE && fc->cache_size > 0) {
+		sc->cache = calloc((size_t)fc->cache_size, sizeof *sc->cache);
+		if (!sc->cache) {
+			free(sc);
+			return NULL;
+		}
+		sc->n = (uint32_t)fc->cache_size;
+	}
+	return sc;
+}
+
+void filter_scratch_free(struct filter_scratch *sc)
+{
+	if (!sc)
+		return;
+	free(sc->cache);
+	free(sc);
+}
+
+struct adapt {
+	struct walk w;
+	struct filter_scratch *scratch;
+	uint32_t grid;     /* sub-pixel grid cells per pixel side: 2^max_depth */
+};
+
+/*
+ * Colour at grid corner (x, y): the corner cache holds corners on pixel edges,
+ * the only ones another pixel can share; a corner's colour does not depend on
+ * whether it came from the cache.
+ */
+static vec3 corner(struct adapt *a, uint32_t x, uint32_t y)
+{
+	struct filter_scratch *sc = a->scratch;
+	int shared = x % a->grid == 0 || y % a->grid == 0;
+	struct corner *e = NULL;
+	if (shared && sc && sc->n) {
+		e = &sc->cache[rng_mix((uint64_t)x << 32 | y) % sc->n];
+		if (e->used && e->x == x && e->y == y)
+			return e->c;
+	}
+	a->w.sx = x;
+	a->w.sy = y;
+	struct sample smp = { (double)x / a->grid, (double)y / a->grid, 0, 0, 0, 0, 0 };
+	vec3 v = expand(&a->w, 0, smp);
+	if (e) {
+		e->x = x;
+		e->y = y;
+		e->c = v;
+		e->used = 1;
+	}
+	return v;
+}
+
+static double clamp01(double v) { return fmin(fmax(v, 0.0), 1.0); }
+
+/* Largest channel difference between two colours as displayed (clamped). */
+static double cdiff(vec3 a, vec3 b)
+{
+	double dx = fabs(clamp01(a.x) - clamp01(b.x));
+	double dy = fabs(clamp01(a.y) - clamp01(b.y));
+	double dz = fabs(clamp01(a.z) - clamp01(b.z));
+	return fmax(dx, fmax(dy, dz));
+}
+
+/*
+ * Average colour over the square with top-left grid corner (x, y) and side
+ * size cells, given its corners (tl, tr, bl, br). It is split into four when
+ * two corners sharing an edge differ by more than thr and depth levels remain.
+ */
+static vec3 adapt_square(struct adapt *a, uint32_t x, uint32_t y, uint32_t size, vec3 tl, vec3 tr,
+			 vec3 bl, vec3 br, int depth, double thr)
+{
+	if (depth > 0 && size >= 2 &&
+	    (cdiff(tl, tr) > thr || cdiff(bl, br) > thr || cdiff(tl, bl) > thr || cdiff(tr, br) > thr)) {
+		uint32_t h = size / 2;
+		vec3 t = corner(a, x + h, y), l = corner(a, x, y + h), m = corner(a, x + h, y + h);
+		vec3 r = corner(a, x + size, y + h), b = corner(a, x + h, y + size);
+		double nt = thr * a->w.fc->base.relax;
+		vec3 s = adapt_square(a, x, y, h, tl, t, l, m, depth - 1, nt);
+		s = v3_add(s, adapt_square(a, x + h, y, h, t, tr, m, r, depth - 1, nt));
+		s = v3_add(s, adapt_square(a, x, y + h, h, l, m, bl, b, depth - 1, nt));
+		s = v3_add(s, adapt_square(a, x + h, y + h, h, m, r, b, br, depth - 1, nt));
+		return v3_scale(s, 0.25);
+	}
+	return v3_scale(v3_add(v3_add(tl, tr), v3_add(bl, br)), 0.25);
+}
+
+vec3 filter_pixel(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x,
+		  uint32_t y, filter_trace_fn fn, void *arg, uint64_t *rays)
+{
+	if (fc->base.kind != FILTER_ADAPTIVE)
+		return filter_point(fc, x + 0.5, y + 0.5, x, y, fn, arg, rays);
+	struct adapt a;
+	a.w = (struct walk){ fc, 0, 0, fn, arg, 0 };
+	a.scratch = scratch;
+	a.grid = 1u << fc->base.max_depth;
+	uint32_t g = a.grid, x0 = x * g, y0 = y * g;
+	vec3 tl = corner(&a, x0, y0), tr = corner(&a, x0 + g, y0);
+	vec3 bl = corner(&a, x0, y0 + g), br = corner(&a, x0 + g, y0 + g);
+	vec3 v = adapt_square(&a, x0, y0, g, tl, tr, bl, br, fc->base.max_depth, fc->base.threshold);
+	if (rays)
+		*rays += a.w.rays;
+	return v;
+}
+
+void filter_quantise(vec3 c, uint8_t out[3])
+{
+	out[0] = (uint8_t)floor(clamp01(c.x) * 255.0 + 0.5);
+	out[1] = (uint8_t)floor(clamp01(c.y) * 255.0 + 0.5);
+	out[2] = (uint8_t)floor(clamp01(c.z) * 255.0 + 0.5);
+}

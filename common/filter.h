@@ -1,0 +1,84 @@
+/*
+ * filter.h - pixel sampling: the camera's filters layered in the order
+ * written (docs/camera.md).
+ *
+ * The first standard or adaptive filter is the base: standard asks for one
+ * value at the pixel centre; adaptive asks for values at the pixel's corners
+ * and at the corners of sub-pixels where it subdivides. Every filter written
+ * after the base multiplies each of those values into several rays:
+ * super-sample (a grid of offsets), disk (random offsets within a radius,
+ * tent-weighted), lens (random points on a thin-lens aperture). A later
+ * standard adds nothing (one ray through the position passed down); a later
+ * adaptive, and every filter before the base, is ignored (with a warning).
+ *
+ * Randomness: every random number is a function of (position, sample index,
+ * layer) through common/rng.h, where position is the pixel for standard and
+ * the corner's position on the 1/2^max-depth sub-pixel grid for adaptive, and
+ * the sample index enumerates the layered samples in a fixed order. So a
+ * pixel's value depends on the scene and the pixel only, never on the tile or
+ * the thread, and an adaptive corner has one value wherever it is traced.
+ */
+#ifndef PORTRAY_FILTER_H
+#define PORTRAY_FILTER_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "common/camera.h"
+
+/* Colour seen along an eye ray; seed is the (position, sample) stream. */
+typedef vec3 (*filter_trace_fn)(void *arg, const struct ray *r, uint64_t seed);
+
+struct filter_chain {
+	struct cam cam;
+	struct scene_filter base;                 /* kind STANDARD or ADAPTIVE */
+	struct scene_filter layers[LIM_FILTERS];  /* the multiplying filters after the base */
+	int n_layers;
+	int cache_size;                           /* adaptive corner cache entries (0 = none) */
+};
+
+/*
+ * Builds the chain for camera sc on a w x h image; cache sizes of 0 fall back
+ * to im->intersect_buffer. Returns 0, or -1 for a degenerate camera.
+ */
+int filter_chain_init(struct filter_chain *fc, const struct scene_camera *sc,
+		      const struct scene_image *im, uint32_t w, uint32_t h);
+
+/*
+ * Describes the filters that are ignored (written before the first standard
+ * or adaptive filter, a later adaptive, or no base filter at all) as one
+ * warning per line ("file:line:col: warning: ...\n") into buf (NUL-terminated,
+ * truncated to n). Returns the number of ignored filters (0: buf is "").
+ */
+int filter_warnings(const struct scene_camera *sc, char *buf, size_t n);
+
+/* Eye rays per pixel the chain traces for standard (adaptive: at the pixel's
+ * corners before any subdivision, per corner). Saturates at UINT64_MAX. */
+uint64_t filter_rays_per_sample(const struct filter_chain *fc);
+
+/* Per-thread scratch for one tile: the adaptive corner cache. */
+struct filter_scratch;
+/* NULL on out of memory; for a standard chain it holds nothing. Caller frees. */
+struct filter_scratch *filter_scratch_new(const struct filter_chain *fc);
+void filter_scratch_free(struct filter_scratch *sc);
+
+/*
+ * Colour of pixel (x, y) (linear, unclamped): a pure function of the chain,
+ * fn and the pixel. *rays (may be NULL) is increased by the eye rays traced.
+ * scratch comes from filter_scratch_new for this chain (NULL: no cache).
+ */
+vec3 filter_pixel(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x,
+		  uint32_t y, filter_trace_fn fn, void *arg, uint64_t *rays);
+
+/*
+ * Colour at a continuous pixel position (px, py) with every layered filter
+ * applied, seeded by integer position (sx, sy): what the base filter asks for.
+ * Exposed for tests.
+ */
+vec3 filter_point(const struct filter_chain *fc, double px, double py, uint32_t sx, uint32_t sy,
+		  filter_trace_fn fn, void *arg, uint64_t *rays);
+
+/* Clamps each channel to [0,1] (NaN to 0) and rounds to 8 bits. */
+void filter_quantise(vec3 c, uint8_t out[3]);
+
+#endif

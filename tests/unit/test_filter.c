@@ -1,0 +1,317 @@
+/* test_filter.c - layered filters (common/filter.c) on synthetic scenes. */
+#include <math.h>
+#include <string.h>
+
+#include "common/filter.h"
+#include "common/rng.h"
+#include "tests/unit/check.h"
+
+/* A constant colour everywhere. */
+static vec3 trace_const(void *arg, const struct ray *r, uint64_t seed)
+{
+	(void)r;
+	(void)seed;
+	return *(const vec3 *)arg;
+}
+
+/* A colour that depends on the ray and on the seed (like an area light). */
+static vec3 trace_noisy(void *arg, const struct ray *r, uint64_t seed)
+{
+	(void)arg;
+	return v3(0.5 + 0.5 * r->d.x, rng_uniform(seed, 7), 0.5 + 0.4 * sin(40 * r->d.y));
+}
+
+/* Half-space edge: white where the ray points right of a slanted line. */
+static vec3 trace_edge(void *arg, const struct ray *r, uint64_t seed)
+{
+	(void)arg;
+	(void)seed;
+	return r->d.x + 0.37 * r->d.y > 0.013 ? v3(1, 1, 1) : v3(0, 0, 0);
+}
+
+/* Records the last ray. */
+static struct ray last_ray;
+static vec3 trace_record(void *arg, const struct ray *r, uint64_t seed)
+{
+	(void)arg;
+	(void)seed;
+	last_ray = *r;
+	return v3(0, 0, 0);
+}
+
+static struct scene_camera base_camera(void)
+{
+	struct scene_camera c;
+	scene_camera_defaults(&c);
+	c.look_from = v3(0, 0, 5);
+	c.depth = 1;
+	c.x_size = 1;
+	c.y_size = 0.75;
+	c.n_filters = 0;
+	return c;
+}
+
+static void add(struct scene_camera *c, enum filter_kind k)
+{
+	scene_filter_defaults(&c->filters[c->n_filters], k);
+	c->filters[c->n_filters].loc.line = c->n_filters + 1;
+	c->n_filters++;
+}
+
+static struct scene_image img;
+
+static void chain(struct filter_chain *fc, const struct scene_camera *c, uint32_t w, uint32_t h)
+{
+	int rc = filter_chain_init(fc, c, &img, w, h);
+	CHECK(rc == 0);
+}
+
+/* Renders w x h through tiles of side t, fresh scratch per tile, into out. */
+static uint64_t render_tiles(const struct filter_chain *fc, uint32_t w, uint32_t h, uint32_t t,
+			     filter_trace_fn fn, vec3 *out)
+{
+	uint64_t rays = 0;
+	for (uint32_t ty = 0; ty < h; ty += t)
+		for (uint32_t tx = 0; tx < w; tx += t) {
+			struct filter_scratch *s = filter_scratch_new(fc);
+			CHECK(s != NULL);
+			for (uint32_t y = ty; y < ty + t && y < h; y++)
+				for (uint32_t x = tx; x < tx + t && x < w; x++)
+					out[y * w + x] = filter_pixel(fc, s, x, y, fn, NULL, &rays);
+			filter_scratch_free(s);
+		}
+	return rays;
+}
+
+/* Film position of a ray (inverse of the camera), in continuous pixels. */
+static void ray_to_pixel(const struct cam *c, const struct ray *r, double *px, double *py)
+{
+	double t = c->depth / v3_dot(r->d, c->view);
+	vec3 p = v3_add(r->o, v3_scale(r->d, t));
+	vec3 centre = v3_add(c->from, v3_scale(c->view, c->depth));
+	*px = (v3_dot(v3_sub(p, centre), c->right) / c->x_size + 0.5) * c->w;
+	*py = (v3_dot(v3_sub(p, centre), c->down) / c->y_size + 0.5) * c->h;
+}
+
+int main(void)
+{
+	scene_image_defaults(&img);
+	struct filter_chain fc, fc2;
+	struct scene_camera c;
+	uint64_t rays;
+	char warn[1024];
+
+	/* no filter, or standard: one ray through the pixel centre */
+	c = base_camera();
+	chain(&fc, &c, 40, 30);
+	CHECK(fc.base.kind == FILTER_STANDARD && fc.n_layers == 0);
+	rays = 0;
+	filter_pixel(&fc, NULL, 3, 4, trace_record, NULL, &rays);
+	CHECK(rays == 1);
+	struct ray want = cam_ray(&fc.cam, 3.5, 4.5);
+	CHECK(memcmp(&want.d, &last_ray.d, sizeof want.d) == 0);
+
+	/* the manual's example: 10 x 3 x 3 x 10 = 900 rays per pixel */
+	c = base_camera();
+	add(&c, FILTER_STANDARD);
+	add(&c, FILTER_LENS);
+	c.filters[1].samples = 10;
+	c.filters[1].focal_length = 30;
+	add(&c, FILTER_SUPERSAMPLE);
+	c.filters[2].x_samples = 3;
+	c.filters[2].y_samples = 3;
+	add(&c, FILTER_DISK);
+	c.filters[3].samples = 10;
+	chain(&fc, &c, 8, 6);
+	CHECK(filter_rays_per_sample(&fc) == 900);
+	rays = 0;
+	vec3 v1 = filter_pixel(&fc, NULL, 2, 3, trace_noisy, NULL, &rays);
+	CHECK(rays == 900);
+	CHECK(filter_warnings(&c, warn, sizeof warn) == 0 && warn[0] == '\0');
+	/* deterministic: the same pixel twice gives the same colour */
+	vec3 v2 = filter_pixel(&fc, NULL, 2, 3, trace_noisy, NULL, NULL);
+	CHECK(memcmp(&v1, &v2, sizeof v1) == 0);
+
+	/* a flat-colour scene looks the same under every filter */
+	vec3 grey = v3(0.31, 0.62, 0.93); /* away from the x.5/255 rounding edges */
+	uint8_t q0[3], q1[3];
+	filter_quantise(grey, q0);
+	for (int k = 0; k <= FILTER_LENS; k++) {
+		c = base_camera();
+		add(&c, k == FILTER_ADAPTIVE ? FILTER_ADAPTIVE : FILTER_STANDARD);
+		if (k != FILTER_STANDARD && k != FILTER_ADAPTIVE)
+			add(&c, (enum filter_kind)k);
+		chain(&fc, &c, 8, 6);
+		struct filter_scratch *s = filter_scratch_new(&fc);
+		for (uint32_t y = 0; y < 6; y++)
+			for (uint32_t x = 0; x < 8; x++) {
+				filter_quantise(filter_pixel(&fc, s, x, y, trace_const, &grey, NULL), q1);
+				CHECK(memcmp(q0, q1, 3) == 0);
+			}
+		filter_scratch_free(s);
+	}
+
+	/* super-sample 1x1 == standard, bit for bit, even with seed-dependent colour */
+	c = base_camera();
+	add(&c, FILTER_STANDARD);
+	chain(&fc, &c, 16, 12);
+	add(&c, FILTER_SUPERSAMPLE);
+	c.filters[1].x_samples = c.filters[1].y_samples = 1;
+	chain(&fc2, &c, 16, 12);
+	for (uint32_t y = 0; y < 12; y++)
+		for (uint32_t x = 0; x < 16; x++) {
+			v1 = filter_pixel(&fc, NULL, x, y, trace_noisy, NULL, NULL);
+			v2 = filter_pixel(&fc2, NULL, x, y, trace_noisy, NULL, NULL);
+			CHECK(memcmp(&v1, &v2, sizeof v1) == 0);
+		}
+	/* super-sample 2x3 puts its rays on the centres of a grid of cells */
+	c.filters[1].x_samples = 2;
+	c.filters[1].y_samples = 3;
+	chain(&fc2, &c, 16, 12);
+	CHECK(filter_rays_per_sample(&fc2) == 6);
+
+	/* filters before the first standard/adaptive are ignored, with a warning */
+	c = base_camera();
+	add(&c, FILTER_DISK);
+	add(&c, FILTER_STANDARD);
+	chain(&fc2, &c, 16, 12);
+	CHECK(fc2.n_layers == 0 && filter_rays_per_sample(&fc2) == 1);
+	CHECK(filter_warnings(&c, warn, sizeof warn) == 1);
+	CHECK(strstr(warn, ":1:0: warning: filter disk ignored") != NULL);
+	v1 = filter_pixel(&fc, NULL, 5, 5, trace_noisy, NULL, NULL);
+	v2 = filter_pixel(&fc2, NULL, 5, 5, trace_noisy, NULL, NULL);
+	CHECK(memcmp(&v1, &v2, sizeof v1) == 0);
+	/* only filters before: all ignored, standard used */
+	c = base_camera();
+	add(&c, FILTER_LENS);
+	chain(&fc2, &c, 16, 12);
+	CHECK(fc2.base.kind == FILTER_STANDARD && fc2.n_layers == 0);
+	CHECK(filter_warnings(&c, warn, sizeof warn) == 1 && strstr(warn, "using filter standard"));
+	/* a later standard changes nothing */
+	c = base_camera();
+	add(&c, FILTER_STANDARD);
+	add(&c, FILTER_STANDARD);
+	chain(&fc2, &c, 16, 12);
+	CHECK(filter_warnings(&c, warn, sizeof warn) == 0 && filter_rays_per_sample(&fc2) == 1);
+
+	/* disk: offsets within the radius, different per pixel and sample */
+	c = base_camera();
+	add(&c, FILTER_STANDARD);
+	add(&c, FILTER_DISK);
+	c.filters[1].samples = 1;
+	c.filters[1].radius = 0.9;
+	chain(&fc, &c, 40, 30);
+	double px, py, maxr = 0, minr = 1, lastpx = -1;
+	int same = 0;
+	for (uint32_t i = 0; i < 200; i++) {
+		filter_pixel(&fc, NULL, i % 40, i / 40, trace_record, NULL, NULL);
+		ray_to_pixel(&fc.cam, &last_ray, &px, &py);
+		double dx = px - (i % 40 + 0.5), dy = py - (i / 40 + 0.5), rr = sqrt(dx * dx + dy * dy);
+		maxr = fmax(maxr, rr);
+		minr = fmin(minr, rr);
+		same += fabs(dx - lastpx) < 1e-12;
+		lastpx = dx;
+	}
+	CHECK(maxr <= 0.9 + 1e-9 && maxr > 0.7 && minr < 0.2 && same == 0);
+	/* tent weight: a sample's weight is 1 - r/R; with one sample per pixel the
+	 * weighted mean is that sample's colour (weights normalised) */
+	v1 = filter_pixel(&fc, NULL, 7, 7, trace_const, &grey, NULL);
+	CHECK_NEAR(v1.y, 0.62, 1e-12);
+
+	/* lens: all rays of a pixel meet at the focal distance; aperture radius kept */
+	c = base_camera();
+	add(&c, FILTER_STANDARD);
+	add(&c, FILTER_LENS);
+	c.filters[1].samples = 1;
+	c.filters[1].radius = 0.25;
+	c.filters[1].focal_length = 3.0;
+	chain(&fc, &c, 40, 30);
+	struct ray pin = cam_ray(&fc.cam, 11.5, 6.5);
+	vec3 focus = v3_add(pin.o, v3_scale(pin.d, 3.0 / v3_dot(pin.d, fc.cam.view)));
+	double maxa = 0;
+	for (uint32_t i = 0; i < 50; i++) {
+		struct filter_chain f2 = fc;
+		f2.layers[0].samples = (int)i + 1; /* different sample indices */
+		filter_pixel(&f2, NULL, 11, 6, trace_record, NULL, NULL);
+		double t = v3_dot(v3_sub(focus, last_ray.o), last_ray.d);
+		CHECK_NEAR(v3_len(v3_sub(v3_add(last_ray.o, v3_scale(last_ray.d, t)), focus)), 0, 1e-9);
+		double a = v3_len(v3_sub(last_ray.o, fc.cam.from));
+		CHECK(a <= 0.25 + 1e-12);
+		maxa = fmax(maxa, a);
+	}
+	CHECK(maxa > 0.15);
+
+	/* adaptive, threshold huge: the mean of the four corners, 4 rays alone,
+	 * 2 more per pixel along a row when the cache shares corners */
+	c = base_camera();
+	add(&c, FILTER_ADAPTIVE);
+	c.filters[0].threshold = 1e9;
+	chain(&fc, &c, 16, 12);
+	uint32_t g = 1u << fc.base.max_depth;
+	for (uint32_t y = 0; y < 12; y += 3)
+		for (uint32_t x = 0; x < 16; x += 5) {
+			rays = 0;
+			v1 = filter_pixel(&fc, NULL, x, y, trace_noisy, NULL, &rays);
+			CHECK(rays == 4);
+			vec3 tl = filter_point(&fc, x, y, x * g, y * g, trace_noisy, NULL, NULL);
+			vec3 tr = filter_point(&fc, x + 1, y, (x + 1) * g, y * g, trace_noisy, NULL, NULL);
+			vec3 bl = filter_point(&fc, x, y + 1, x * g, (y + 1) * g, trace_noisy, NULL, NULL);
+			vec3 br = filter_point(&fc, x + 1, y + 1, (x + 1) * g, (y + 1) * g, trace_noisy, NULL, NULL);
+			v2 = v3_scale(v3_add(v3_add(tl, tr), v3_add(bl, br)), 0.25);
+			CHECK(memcmp(&v1, &v2, sizeof v1) == 0);
+		}
+	struct filter_scratch *s = filter_scratch_new(&fc);
+	rays = 0;
+	for (uint32_t x = 0; x < 4; x++)
+		filter_pixel(&fc, s, x, 0, trace_const, &grey, &rays);
+	CHECK(rays == 4 + 3 * 2);
+	filter_scratch_free(s);
+
+	/* adaptive on an edge: subdivides, estimates coverage, and the image does
+	 * not depend on the tile size or the cache size */
+	c = base_camera();
+	add(&c, FILTER_ADAPTIVE);
+	c.filters[0].threshold = 0.1;
+	c.filters[0].max_depth = 3;
+	c.filters[0].cache_size = 7;
+	add(&c, FILTER_DISK); /* random layer under adaptive: corners seeded by position */
+	c.filters[1].samples = 2;
+	chain(&fc, &c, 24, 18);
+	static vec3 a1[24 * 18], a2[24 * 18], a3[24 * 18];
+	uint64_t r1 = render_tiles(&fc, 24, 18, 24, trace_edge, a1);
+	render_tiles(&fc, 24, 18, 5, trace_edge, a2);
+	fc.cache_size = 1000;
+	uint64_t r3 = render_tiles(&fc, 24, 18, 7, trace_edge, a3);
+	CHECK(memcmp(a1, a2, sizeof a1) == 0);
+	CHECK(memcmp(a1, a3, sizeof a1) == 0);
+	CHECK(r3 < r1);                 /* the bigger cache traces fewer rays */
+	CHECK(r1 > 24 * 18 * 4 * 2 / 4); /* subdivision happened somewhere */
+	int partial = 0;
+	for (int i = 0; i < 24 * 18; i++)
+		partial += a1[i].x > 0.05 && a1[i].x < 0.95;
+	CHECK(partial >= 10);
+	/* without the disk layer, coverage of an edge pixel is estimated on the
+	 * 1/8 grid: compare with the exact area by fine sampling */
+	c.n_filters = 1;
+	chain(&fc, &c, 24, 18);
+	render_tiles(&fc, 24, 18, 24, trace_edge, a1);
+	double worst = 0;
+	for (uint32_t y = 0; y < 18; y++)
+		for (uint32_t x = 0; x < 24; x++) {
+			double cov = 0;
+			for (int k = 0; k < 64 * 64; k++) {
+				struct ray rr = cam_ray(&fc.cam, x + (k % 64 + 0.5) / 64, y + (k / 64 + 0.5) / 64);
+				cov += trace_edge(NULL, &rr, 0).x;
+			}
+			worst = fmax(worst, fabs(cov / 4096 - a1[y * 24 + x].x));
+		}
+	CHECK(worst < 0.15);
+
+	/* quantisation: clamp, round to nearest, no gamma */
+	uint8_t q[3];
+	filter_quantise(v3(0.5, 1.7, -0.2), q);
+	CHECK(q[0] == 128 && q[1] == 255 && q[2] == 0);
+	filter_quantise(v3(NAN, 1.0 / 255, 0.4 / 255), q);
+	CHECK(q[0] == 0 && q[1] == 1 && q[2] == 0);
+	TEST_MAIN_END();
+}
