@@ -9,6 +9,7 @@
 #define PORTRAY_RENDER_H
 
 #include <stdatomic.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "common/scene.h"
@@ -28,22 +29,43 @@ void renderer_size(const struct renderer *r, uint32_t *w, uint32_t *h);
 /* --size WxH overrides the image statement; call before rendering. */
 int renderer_set_size(struct renderer *r, uint32_t w, uint32_t h);
 
-/* Renders one tile into rgb (w*h*3 bytes, rows top to bottom). Thread-safe. */
+/*
+ * Renders one tile into rgb (t.w*t.h*3 bytes, rows top to bottom). Pixels of
+ * the rectangle outside the image are written black. Thread-safe.
+ */
 void renderer_tile(const struct renderer *r, struct tile_rect t, uint8_t *rgb);
+/*
+ * As renderer_tile, but gives up between pixels when cancel (may be NULL)
+ * becomes non-zero. Returns 1 when the whole tile is in rgb, 0 when it gave up
+ * (rgb then holds a partial tile: do not use it).
+ */
+int renderer_tile_cancellable(const struct renderer *r, struct tile_rect t, uint8_t *rgb,
+			      atomic_int *cancel);
 
-/* Local thread pool over tiles. */
+/* Eye rays traced by this renderer so far, over all threads (for Mrays/s). */
+uint64_t renderer_rays(const struct renderer *r);
+/* Number of filters ignored and their warnings (see filter_warnings): the
+ * master prints them once. buf is NUL-terminated, truncated to n. */
+int renderer_warnings(const struct renderer *r, char *buf, size_t n);
+
+/* Local thread pool over tiles. fn is called after every finished tile, by
+ * the thread that finished it, one call at a time (under a mutex). */
 struct render_progress {
 	void (*fn)(void *arg, uint64_t tiles_done, uint64_t tiles_total);
 	void *arg;
 };
 /*
- * Renders the whole image into image (w*h*3) with `threads` threads (0 = all
- * cores) and square tiles of `tile` pixels. Stops early when *cancel becomes
- * non-zero; done[] (one byte per tile, may be NULL) marks finished tiles.
- * Returns the number of tiles finished.
+ * Renders the whole image into image (w*h*3, renderer_size) with `threads`
+ * threads (0 = all cores) and square tiles of `tile` pixels (0 = 32), handed
+ * out in row-major order. Stops early when *cancel (may be NULL) becomes
+ * non-zero: tiles not finished are left untouched in image (callers start
+ * from black). progress may be NULL. Returns the number of tiles finished.
  */
 uint64_t render_image(const struct renderer *r, int threads, uint32_t tile, uint8_t *image,
 		      const struct render_progress *progress, atomic_int *cancel);
+
+/* Number of tiles render_image uses for a w x h image with tiles of side tile. */
+uint64_t render_tile_count(uint32_t w, uint32_t h, uint32_t tile);
 
 /* Number of online CPUs (at least 1). */
 int render_ncpus(void);

@@ -1,0 +1,241 @@
+/*
+ * render.c - the tile renderer and the local thread pool (render.h).
+ *
+ * The same code runs in the master (locally) and in every worker: a tile is
+ * a rectangle of pixels, each pixel's colour comes from filter_pixel over
+ * shade_trace, so it depends on the scene and the pixel alone.
+ */
+#include "common/render.h"
+
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "common/accel.h"
+#include "common/filter.h"
+#include "common/shade.h"
+
+/* Tile side when the caller passes 0. */
+#define RENDER_DEFAULT_TILE 32u
+/* Threads render_image starts at most: far more than any machine's cores,
+ * small enough that a mistaken -j cannot exhaust the process. */
+#define RENDER_MAX_THREADS 1024
+
+struct renderer {
+	const struct scene *s;
+	struct accel *accel;
+	struct shade_ctx *shade;
+	struct filter_chain fc;
+	uint32_t w, h;
+	atomic_uint_fast64_t rays; /* eye rays traced, all threads */
+};
+
+int renderer_new(const struct scene *s, struct renderer **out, struct scene_error *err)
+{
+	*out = NULL;
+	struct renderer *r = calloc(1, sizeof *r);
+	if (!r)
+		return scene_errorf(err, ERRLEVEL_FATAL, "out of memory");
+	r->s = s;
+	atomic_init(&r->rays, 0);
+	int rc = accel_build(s, &r->accel, err);
+	if (rc)
+		goto fail;
+	rc = shade_ctx_new(s, r->accel, &r->shade, err);
+	if (rc)
+		goto fail;
+	rc = renderer_set_size(r, (uint32_t)s->image.xsize, (uint32_t)s->image.ysize);
+	if (rc) {
+		rc = scene_errorf(err, ERRLEVEL_FATAL, "%s:%d:%d: error: camera is degenerate",
+				  s->camera.loc.file ? s->camera.loc.file : "<scene>", s->camera.loc.line,
+				  s->camera.loc.col);
+		goto fail;
+	}
+	*out = r;
+	return 0;
+fail:
+	renderer_free(r);
+	return rc ? rc : ERRLEVEL_FATAL;
+}
+
+void renderer_free(struct renderer *r)
+{
+	if (!r)
+		return;
+	shade_ctx_free(r->shade);
+	accel_free(r->accel);
+	free(r);
+}
+
+void renderer_size(const struct renderer *r, uint32_t *w, uint32_t *h)
+{
+	*w = r->w;
+	*h = r->h;
+}
+
+int renderer_set_size(struct renderer *r, uint32_t w, uint32_t h)
+{
+	if (w < 1 || h < 1 || w > LIM_IMAGE_SIDE || h > LIM_IMAGE_SIDE ||
+	    (uint64_t)w * h > LIM_IMAGE_PIXELS)
+		return -1;
+	struct filter_chain fc;
+	if (filter_chain_init(&fc, &r->s->camera, &r->s->image, w, h) < 0)
+		return -1;
+	r->fc = fc;
+	r->w = w;
+	r->h = h;
+	return 0;
+}
+
+/* filter_trace_fn over the shading engine. */
+static vec3 trace_shade(void *arg, const struct ray *ray, uint64_t seed)
+{
+	const struct renderer *r = arg;
+	return shade_trace(r->shade, ray, seed);
+}
+
+int renderer_tile_cancellable(const struct renderer *r, struct tile_rect t, uint8_t *rgb,
+			      atomic_int *cancel)
+{
+	struct filter_scratch *scratch = filter_scratch_new(&r->fc); /* NULL: no cache, same colours */
+	uint64_t rays = 0;
+	int complete = 1;
+	for (uint32_t j = 0; j < t.h && complete; j++) {
+		uint8_t *row = rgb + (size_t)j * t.w * 3;
+		for (uint32_t i = 0; i < t.w; i++) {
+			uint64_t x = (uint64_t)t.x + i, y = (uint64_t)t.y + j;
+			if (x >= r->w || y >= r->h) {
+				memset(row + (size_t)i * 3, 0, 3);
+				continue;
+			}
+			vec3 c = filter_pixel(&r->fc, scratch, (uint32_t)x, (uint32_t)y, trace_shade,
+					      (void *)r, &rays);
+			filter_quantise(c, row + (size_t)i * 3);
+		}
+		if (cancel && atomic_load_explicit(cancel, memory_order_relaxed))
+			complete = 0;
+	}
+	filter_scratch_free(scratch);
+	/* the counter is statistics only: casting away const is safe, r was
+	 * allocated non-const by renderer_new */
+	atomic_fetch_add_explicit(&((struct renderer *)r)->rays, rays, memory_order_relaxed);
+	return complete;
+}
+
+void renderer_tile(const struct renderer *r, struct tile_rect t, uint8_t *rgb)
+{
+	(void)renderer_tile_cancellable(r, t, rgb, NULL);
+}
+
+uint64_t renderer_rays(const struct renderer *r)
+{
+	return atomic_load_explicit(&r->rays, memory_order_relaxed);
+}
+
+int renderer_warnings(const struct renderer *r, char *buf, size_t n)
+{
+	return filter_warnings(&r->s->camera, buf, n);
+}
+
+int render_ncpus(void)
+{
+	long n = sysconf(_SC_NPROCESSORS_ONLN);
+	if (n < 1)
+		return 1;
+	return n > RENDER_MAX_THREADS ? RENDER_MAX_THREADS : (int)n;
+}
+
+uint64_t render_tile_count(uint32_t w, uint32_t h, uint32_t tile)
+{
+	if (tile == 0)
+		tile = RENDER_DEFAULT_TILE;
+	return (uint64_t)((w + tile - 1) / tile) * ((h + tile - 1) / tile);
+}
+
+/* ---- the thread pool ------------------------------------------------------ */
+
+struct pool {
+	const struct renderer *r;
+	uint32_t tile, ntx;
+	uint64_t total;
+	uint8_t *image;
+	const struct render_progress *progress;
+	atomic_int *cancel;
+	atomic_uint_fast64_t next; /* next tile to hand out */
+	pthread_mutex_t lock;      /* guards done and progress calls */
+	uint64_t done;
+};
+
+static int cancelled(const struct pool *p)
+{
+	return p->cancel && atomic_load_explicit(p->cancel, memory_order_relaxed);
+}
+
+/* One thread: takes tiles from the counter until none is left or cancelled. */
+static void *pool_run(void *arg)
+{
+	struct pool *p = arg;
+	uint8_t *buf = malloc((size_t)p->tile * p->tile * 3);
+	if (!buf)
+		return NULL; /* the other threads (and the caller's) carry on */
+	while (!cancelled(p)) {
+		uint64_t k = atomic_fetch_add(&p->next, 1);
+		if (k >= p->total)
+			break;
+		struct tile_rect t;
+		t.x = (uint32_t)(k % p->ntx) * p->tile;
+		t.y = (uint32_t)(k / p->ntx) * p->tile;
+		t.w = p->r->w - t.x < p->tile ? p->r->w - t.x : p->tile;
+		t.h = p->r->h - t.y < p->tile ? p->r->h - t.y : p->tile;
+		if (!renderer_tile_cancellable(p->r, t, buf, p->cancel))
+			break;
+		for (uint32_t j = 0; j < t.h; j++)
+			memcpy(p->image + (((size_t)t.y + j) * p->r->w + t.x) * 3, buf + (size_t)j * t.w * 3,
+			       (size_t)t.w * 3);
+		pthread_mutex_lock(&p->lock);
+		p->done++;
+		if (p->progress && p->progress->fn)
+			p->progress->fn(p->progress->arg, p->done, p->total);
+		pthread_mutex_unlock(&p->lock);
+	}
+	free(buf);
+	return NULL;
+}
+
+uint64_t render_image(const struct renderer *r, int threads, uint32_t tile, uint8_t *image,
+		      const struct render_progress *progress, atomic_int *cancel)
+{
+	struct pool p;
+	memset(&p, 0, sizeof p);
+	p.r = r;
+	p.tile = tile ? tile : RENDER_DEFAULT_TILE;
+	if (p.tile > LIM_IMAGE_SIDE)
+		p.tile = LIM_IMAGE_SIDE;
+	p.ntx = (r->w + p.tile - 1) / p.tile;
+	p.total = render_tile_count(r->w, r->h, p.tile);
+	p.image = image;
+	p.progress = progress;
+	p.cancel = cancel;
+	atomic_init(&p.next, 0);
+	pthread_mutex_init(&p.lock, NULL);
+
+	if (threads <= 0)
+		threads = render_ncpus();
+	if (threads > RENDER_MAX_THREADS)
+		threads = RENDER_MAX_THREADS;
+	if ((uint64_t)threads > p.total)
+		threads = (int)p.total;
+	pthread_t tid[RENDER_MAX_THREADS];
+	int started = 0;
+	for (int i = 1; i < threads; i++) {
+		if (pthread_create(&tid[started], NULL, pool_run, &p) != 0)
+			break; /* fewer threads: slower, same image */
+		started++;
+	}
+	pool_run(&p); /* the calling thread works too */
+	for (int i = 0; i < started; i++)
+		pthread_join(tid[i], NULL);
+	pthread_mutex_destroy(&p.lock);
+	return p.done;
+}
