@@ -1,0 +1,195 @@
+/*
+ * test_serial.c - scene encoding: round trips are byte-identical, decoding
+ * survives truncation and corruption, and hostile counts and nesting are
+ * refused before anything large is allocated.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "proto/serial.h"
+#include "scene_fixture.h"
+
+/* encode -> decode -> encode must give the same bytes; returns the first encoding. */
+static uint8_t *round_trip(const struct scene *s, size_t *len_out)
+{
+	uint8_t *a = NULL, *b = NULL;
+	size_t la = 0, lb = 0;
+	*len_out = 0;
+	struct scene *t = NULL;
+	struct scene_error err;
+	CHECK(proto_scene_encode(s, &a, &la) == 0);
+	CHECK(proto_scene_decode(a, la, &t, &err) == 0);
+	if (!t) {
+		fprintf(stderr, "decode: %s\n", err.msg);
+		free(a);
+		return NULL;
+	}
+	CHECK(proto_scene_encode(t, &b, &lb) == 0);
+	CHECK(la == lb && memcmp(a, b, la) == 0);
+	CHECK(t->n_objects == s->n_objects && t->n_defines == s->n_defines && t->n_roots == s->n_roots &&
+	      t->n_materials == s->n_materials && t->n_meshes == s->n_meshes && t->n_lights == s->n_lights);
+	scene_free(t);
+	free(b);
+	*len_out = la;
+	return a;
+}
+
+static void test_fixture(void)
+{
+	struct scene *s = fx_scene();
+	size_t len;
+	uint8_t *a = round_trip(s, &len);
+	CHECK(a != NULL);
+	struct scene *t = NULL;
+	struct scene_error err;
+	CHECK(proto_scene_decode(a, len, &t, &err) == 0);
+	if (t) {
+		/* spot checks of content, not only of bytes */
+		CHECK(t->camera.n_filters == 5 && t->camera.filters[2].x_samples == 3);
+		CHECK(t->camera.filters[4].kind == FILTER_LENS);
+		CHECK(t->image.xsize == 64 && t->image.no_reflections && !t->image.no_shadows);
+		CHECK(strcmp(t->materials[0].name, "red") == 0 && t->materials[2].name == NULL);
+		CHECK(t->materials[7].shader.kind == SHADER_FADES && t->materials[7].shader.fades_materials);
+		CHECK(t->materials[7].shader.fades[1].material == 0);
+		CHECK(t->meshes[0].normals != NULL && t->meshes[1].normals == NULL);
+		CHECK(strcmp(t->meshes[0].file, "smooth.raw") == 0);
+		CHECK(t->lights[2].shape == LIGHT_CYLINDER && t->lights[3].no_shadows);
+		uint32_t poly = s->roots[9];
+		CHECK(t->objects[poly].kind == PRIM_POLYGON && t->objects[poly].u.polygon.n_points == 7 &&
+		      t->objects[poly].u.polygon.contour_start[1] == 4);
+		CHECK(memcmp(&t->objects[0].xform, &s->objects[0].xform, sizeof(mat34)) == 0);
+		CHECK(strcmp(t->defines[1].name, "wall") == 0 && t->defines[0].n_objects == 2);
+		CHECK(strcmp(t->objects[0].loc.file, PROTO_SCENE_FILE) == 0);
+		struct scene_stats st1, st2;
+		scene_stats(s, &st1);
+		scene_stats(t, &st2);
+		CHECK(memcmp(&st1, &st2, sizeof st1) == 0);
+		scene_free(t);
+	}
+
+	/* every truncation fails cleanly */
+	int bad_ok = 1;
+	for (size_t n = 0; n < len; n++) {
+		struct scene *u = NULL;
+		if (proto_scene_decode(a, n, &u, &err) == 0 || u != NULL)
+			bad_ok = 0;
+		scene_free(u);
+	}
+	CHECK(bad_ok);
+	/* a byte too many fails */
+	uint8_t *c = malloc(len + 1);
+	memcpy(c, a, len);
+	c[len] = 0;
+	t = NULL;
+	CHECK(proto_scene_decode(c, len + 1, &t, &err) == 1 && t == NULL);
+	CHECK(strstr(err.msg, "trailing") != NULL);
+
+	/* bit flips: decoding either fails or gives a scene that round-trips */
+	int flips_ok = 1, accepted = 0;
+	for (size_t i = 0; i < len; i++) {
+		memcpy(c, a, len);
+		c[i] ^= (uint8_t)(1u << (i % 8));
+		struct scene *u = NULL;
+		if (proto_scene_decode(c, len, &u, &err) == 0) {
+			accepted++;
+			uint8_t *e = NULL;
+			size_t le = 0;
+			struct scene *v = NULL;
+			if (proto_scene_encode(u, &e, &le) || proto_scene_decode(e, le, &v, &err))
+				flips_ok = 0;
+			scene_free(v);
+			free(e);
+		}
+		scene_free(u);
+	}
+	CHECK(flips_ok);
+	CHECK(accepted > 0); /* most flips land in doubles and stay valid */
+
+	/* wrong version is named in the message */
+	memcpy(c, a, len);
+	c[7] = 99;
+	CHECK(proto_scene_decode(c, len, &t, &err) == 1 && strstr(err.msg, "version 99") != NULL);
+	free(c);
+	free(a);
+	scene_free(s);
+}
+
+/* A count far beyond the bytes present is refused without a huge allocation. */
+static void test_hostile_counts(void)
+{
+	struct scene *s = scene_new();
+	uint8_t *a;
+	size_t len;
+	CHECK(proto_scene_encode(s, &a, &len) == 0);
+	/* layout ends with 6 u32 counts (materials meshes lights objects defines roots) = 0 */
+	CHECK(len > 24);
+	uint8_t *c = malloc(len);
+	for (int k = 0; k < 6; k++) {
+		memcpy(c, a, len);
+		size_t at = len - 24 + 4 * (size_t)k;
+		c[at] = 0x7f, c[at + 1] = 0xff, c[at + 2] = 0xff, c[at + 3] = 0xff;
+		struct scene *t = NULL;
+		struct scene_error err;
+		CHECK(proto_scene_decode(c, len, &t, &err) == 1 && t == NULL);
+	}
+	/* the unmodified empty scene decodes */
+	memcpy(c, a, len);
+	struct scene *t = NULL;
+	struct scene_error err;
+	CHECK(proto_scene_decode(c, len, &t, &err) == 0);
+	scene_free(t);
+	free(c);
+	free(a);
+	scene_free(s);
+}
+
+/* A CSG chain deeper than the limits is refused (it would blow the tracer's stack). */
+static void test_deep_nesting(void)
+{
+	struct scene *s = scene_new();
+	struct scene_object o;
+	struct scene_error err;
+	uint32_t prev, leaf;
+	scene_object_defaults(&o, PRIM_SPHERE);
+	scene_add_object(s, &o, &prev, &err);
+	for (int i = 0; i < LIM_CSG_DEPTH + LIM_DEFINE_DEPTH + 10; i++) {
+		scene_object_defaults(&o, PRIM_SPHERE);
+		scene_add_object(s, &o, &leaf, &err);
+		scene_object_defaults(&o, PRIM_CSG);
+		o.u.csg.operand1 = prev, o.u.csg.operand2 = leaf;
+		scene_add_object(s, &o, &prev, &err);
+	}
+	scene_add_root(s, prev, &err);
+	uint8_t *a;
+	size_t len;
+	CHECK(proto_scene_encode(s, &a, &len) == 0);
+	struct scene *t = NULL;
+	CHECK(proto_scene_decode(a, len, &t, &err) == 1 && strstr(err.msg, "nest") != NULL);
+	free(a);
+	scene_free(s);
+
+	/* shader materials nested too deep */
+	s = scene_new();
+	uint32_t m = SCENE_NONE;
+	for (int i = 0; i < LIM_SHADER_DEPTH + 5; i++) {
+		struct scene_material mat;
+		scene_material_defaults(&mat);
+		if (i)
+			scene_shader_defaults(&mat.shader, SHADER_BUMPY), mat.shader.mat_a = m;
+		scene_add_material(s, &mat, &m, &err);
+	}
+	CHECK(proto_scene_encode(s, &a, &len) == 0);
+	CHECK(proto_scene_decode(a, len, &t, &err) == 1 && strstr(err.msg, "nest") != NULL);
+	free(a);
+	scene_free(s);
+}
+
+int main(void)
+{
+	test_fixture();
+	test_hostile_counts();
+	test_deep_nesting();
+	TEST_MAIN_END();
+}
