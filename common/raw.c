@@ -359,7 +359,8 @@ static uint32_t raw_weld_point(struct raw_weld *w, vec3 p)
 static vec3 raw_unit_scaled(vec3 a)
 {
 	double m = fmax(fabs(a.x), fmax(fabs(a.y), fabs(a.z)));
-	return m > 0 ? v3_norm(v3_scale(a, 1.0 / m)) : a;
+	/* divide (1/m overflows for subnormal m) */
+	return m > 0 ? v3_norm(v3(a.x / m, a.y / m, a.z / m)) : a;
 }
 
 /*

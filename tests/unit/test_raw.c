@@ -370,6 +370,15 @@ static void test_smooth(void)
 	}
 	mesh_done(&m);
 
+	/* subnormal edge lengths still give unit normals (found by fuzz_raw) */
+	mesh_init(&m, "s.raw");
+	m.smooth = true;
+	m.weld = 0;
+	CHECK(parse("9e-324 1 0 0 1 1 0 1 0\n", &m, &e) == 0);
+	for (uint32_t i = 0; m.normals && i < m.n_vertices; i++)
+		CHECK(fabs(v3_len(m.normals[i]) - 1) < 1e-12);
+	mesh_done(&m);
+
 	/* cancelling faces (one triangle both ways round) and degenerate ones */
 	mesh_init(&m, "c.raw");
 	m.smooth = true;
