@@ -1,0 +1,337 @@
+/*
+ * shade.c - what a ray sees: lights (point and shaped), shadows through
+ * transparent objects, Lambert diffuse, Phong highlights, mirror reflection
+ * and refraction. docs/rendering.md states the lighting equation; the code
+ * below follows it term by term.
+ */
+#include "common/shade.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+#include "common/rng.h"
+#include "common/shader.h"
+
+/* A ray whose contribution to the pixel would be below this is not traced:
+ * 1/512 is a quarter of one 8-bit step at full brightness. */
+#define SHADE_MIN_WEIGHT (1.0 / 512.0)
+/*
+ * Secondary rays start this far (relative to the size of the hit point's
+ * coordinates) off the surface, on the side they leave to, so they cannot
+ * hit the surface they start on (no acne). The geometry computes hits in
+ * double precision, whose error is ~1e-15 relative; 1e-9 leaves a wide
+ * margin and is far below anything visible.
+ */
+#define SHADE_EPS_REL 1e-9
+/* Stream tags for rng_derive: one purpose each. */
+#define TAG_LIGHT 0x4c49474854000000ull /* + light index */
+#define TAG_REFLECT 0x5245464cull
+#define TAG_REFRACT 0x52465241ull
+/* 1/golden ratio: the second coordinate of the light-sample lattice */
+#define GOLDEN_FRAC 0.6180339887498949
+
+struct shade_light {
+	const struct scene_light *l;
+	/* cylinder: unit axis frame */
+	vec3 e1, e2;
+	/* box: corner, extents and cumulative face-pair areas */
+	vec3 lo, ext;
+	double area[3], total_area;
+};
+
+struct shade_ctx {
+	const struct scene *s;
+	const struct accel *a;
+	struct shade_light *lights;
+	uint32_t n_lights;
+	bool any_transparent; /* some material has transparency > 0 */
+};
+
+/* Two unit vectors perpendicular to unit axis a and to each other. */
+static void frame(vec3 a, vec3 *e1, vec3 *e2)
+{
+	vec3 t = fabs(a.x) < 0.9 ? v3(1, 0, 0) : v3(0, 1, 0);
+	*e1 = v3_norm(v3_cross(a, t));
+	*e2 = v3_cross(a, *e1);
+}
+
+int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx **out,
+		  struct scene_error *err)
+{
+	*out = NULL;
+	struct shade_ctx *c = calloc(1, sizeof *c);
+	if (!c)
+		goto oom;
+	c->s = s;
+	c->a = a;
+	c->n_lights = s->n_lights;
+	if (s->n_lights) {
+		c->lights = calloc(s->n_lights, sizeof *c->lights);
+		if (!c->lights)
+			goto oom;
+	}
+	for (uint32_t i = 0; i < s->n_lights; i++) {
+		struct shade_light *L = &c->lights[i];
+		const struct scene_light *l = &s->lights[i];
+		L->l = l;
+		if (l->shape == LIGHT_CYLINDER)
+			frame(v3_norm(v3_sub(l->cylinder.to, l->cylinder.from)), &L->e1, &L->e2);
+		if (l->shape == LIGHT_BOX) {
+			L->lo = v3_min(l->box.a, l->box.b);
+			L->ext = v3_sub(v3_max(l->box.a, l->box.b), L->lo);
+			L->area[0] = L->ext.y * L->ext.z; /* the two faces normal to x */
+			L->area[1] = L->ext.x * L->ext.z;
+			L->area[2] = L->ext.x * L->ext.y;
+			L->total_area = L->area[0] + L->area[1] + L->area[2];
+		}
+	}
+	for (uint32_t i = 0; i < s->n_materials; i++)
+		if (s->materials[i].transparency > 0)
+			c->any_transparent = true;
+	*out = c;
+	return 0;
+oom:
+	shade_ctx_free(c);
+	return scene_errorf(err, ERRLEVEL_FATAL, "out of memory preparing the lights");
+}
+
+void shade_ctx_free(struct shade_ctx *c)
+{
+	if (!c)
+		return;
+	free(c->lights);
+	free(c);
+}
+
+static double maxc(vec3 a) { return fmax(a.x, fmax(a.y, a.z)); }
+
+static double frac(double x) { return x - floor(x); }
+
+/* p moved off the surface with geometric normal ng to the side dir points to. */
+static vec3 offset(vec3 p, vec3 ng, vec3 dir)
+{
+	double eps = SHADE_EPS_REL * (1 + fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z))));
+	return v3_add(p, v3_scale(ng, v3_dot(ng, dir) >= 0 ? eps : -eps));
+}
+
+/*
+ * Sample k of n on a light: a point light's position, or a point on the
+ * shape's surface. (u1, u2) form a randomly shifted lattice: u1 stratified
+ * in n strata, u2 a golden-ratio sequence, both shifted by (r1, r2) drawn
+ * from the (pixel, sample) stream, so the n points cover the surface evenly.
+ */
+static vec3 light_point(const struct shade_light *L, int k, int n, double r1, double r2)
+{
+	const struct scene_light *l = L->l;
+	double u1 = frac((k + r1) / n);
+	double u2 = frac(k * GOLDEN_FRAC + r2);
+	switch (l->shape) {
+	case LIGHT_SPHERE: {
+		double z = 1 - 2 * u1, rho = sqrt(fmax(0, 1 - z * z)), phi = 2 * M_PI * u2;
+		vec3 d = v3(rho * cos(phi), rho * sin(phi), z);
+		return v3_add(l->sphere.centre, v3_scale(d, l->sphere.radius));
+	}
+	case LIGHT_CYLINDER: {
+		double phi = 2 * M_PI * u2;
+		vec3 axis = v3_sub(l->cylinder.to, l->cylinder.from);
+		vec3 rad = v3_add(v3_scale(L->e1, cos(phi)), v3_scale(L->e2, sin(phi)));
+		return v3_add(v3_add(l->cylinder.from, v3_scale(axis, u1)), v3_scale(rad, l->cylinder.radius));
+	}
+	case LIGHT_BOX: {
+		if (!(L->total_area > 0))
+			return v3_add(L->lo, v3_scale(L->ext, 0.5)); /* a point: its centre */
+		/* u1 picks a face pair by area, then a side, then a position along it */
+		double t = u1 * L->total_area;
+		int axis = 0;
+		while (axis < 2 && t >= L->area[axis])
+			t -= L->area[axis++];
+		double f = L->area[axis] > 0 ? t / L->area[axis] : 0; /* in [0,1) */
+		int side = f >= 0.5;
+		double a1 = side ? 2 * f - 1 : 2 * f;
+		double c[3] = { 0, 0, 0 };
+		int i1 = (axis + 1) % 3, i2 = (axis + 2) % 3;
+		c[axis] = side;
+		c[i1] = a1;
+		c[i2] = u2;
+		return v3(L->lo.x + c[0] * L->ext.x, L->lo.y + c[1] * L->ext.y, L->lo.z + c[2] * L->ext.z);
+	}
+	case LIGHT_POINT:
+	default:
+		return l->position;
+	}
+}
+
+/*
+ * How much light passes from o to the point lp: (1,1,1) when nothing is in
+ * the way, 0 when something opaque is; each transparent surface crossed
+ * multiplies it by transparency x tran-colour.
+ */
+static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp)
+{
+	struct ray r = { o, v3_sub(lp, o), 0, 1 };
+	if (!c->any_transparent)
+		return accel_occluded(c->a, &r) ? v3(0, 0, 0) : v3(1, 1, 1);
+	vec3 t = v3(1, 1, 1);
+	for (int i = 0; i < LIM_SHADOW_HITS; i++) {
+		struct hit h;
+		if (!accel_intersect(c->a, &r, &h))
+			return t;
+		struct shader_point pt = { h.mp, h.u, h.v, h.n };
+		struct shader_mat m;
+		shader_eval(c->s, h.material, &pt, &m);
+		double td = fmin(m.transparency, 1.0);
+		if (!(td > 0))
+			return v3(0, 0, 0);
+		t = v3_scale(v3_mul(t, v3_max(m.tran_colour, v3(0, 0, 0))), td);
+		if (maxc(t) < SHADE_MIN_WEIGHT)
+			return v3(0, 0, 0);
+		r.o = offset(h.p, h.ng, r.d);
+		r.d = v3_sub(lp, r.o);
+	}
+	return v3(0, 0, 0);
+}
+
+/*
+ * Direct lighting at p (shading normal n facing the viewer, geometric
+ * normal ng on the same side, unit direction to the viewer v): sums over
+ * lights and light samples into *diff (light reaching the surface, times
+ * N.L) and *spec (light times (R.V)^power).
+ */
+static void direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, const struct shader_mat *m,
+		   uint64_t seed, vec3 *diff, vec3 *spec)
+{
+	bool shadows = !c->s->image.no_shadows;
+	bool want_spec = m->specular != 0;
+	*diff = v3(0, 0, 0);
+	*spec = v3(0, 0, 0);
+	for (uint32_t i = 0; i < c->n_lights; i++) {
+		const struct shade_light *L = &c->lights[i];
+		const struct scene_light *l = L->l;
+		int n_samples = l->shape == LIGHT_POINT ? 1 : l->samples;
+		uint64_t ls = rng_derive(seed, TAG_LIGHT + i);
+		double r1 = rng_uniform(ls, 0), r2 = rng_uniform(ls, 1);
+		vec3 sum_d = v3(0, 0, 0), sum_s = v3(0, 0, 0);
+		for (int k = 0; k < n_samples; k++) {
+			vec3 lp = light_point(L, k, n_samples, r1, r2);
+			vec3 to = v3_sub(lp, p);
+			double dist = v3_len(to);
+			if (!(dist > 0))
+				continue;
+			vec3 ldir = v3_scale(to, 1 / dist);
+			double ndotl = v3_dot(n, ldir);
+			if (ndotl <= 0)
+				continue;
+			double rv = 0;
+			if (want_spec) {
+				vec3 refl = v3_sub(v3_scale(n, 2 * ndotl), ldir);
+				rv = v3_dot(refl, v);
+			}
+			vec3 in = l->colour;
+			if (l->fall_off != 0)
+				in = v3_scale(in, 1 / pow(dist, l->fall_off));
+			if (shadows && !l->no_shadows) {
+				vec3 o = offset(p, ng, ldir);
+				vec3 t = transmittance(c, o, lp);
+				if (maxc(t) <= 0)
+					continue;
+				in = v3_mul(in, t);
+			}
+			sum_d = v3_add(sum_d, v3_scale(in, ndotl));
+			if (rv > 0)
+				sum_s = v3_add(sum_s, v3_scale(in, pow(rv, m->spec_power)));
+		}
+		*diff = v3_add(*diff, v3_scale(sum_d, 1.0 / n_samples));
+		*spec = v3_add(*spec, v3_scale(sum_s, 1.0 / n_samples));
+	}
+}
+
+/* d reflected about unit n. */
+static vec3 reflect(vec3 d, vec3 n) { return v3_sub(d, v3_scale(n, 2 * v3_dot(d, n))); }
+
+static vec3 trace(const struct shade_ctx *c, const struct ray *r, int depth, double weight, uint64_t seed);
+
+/* trace() of a secondary ray from o along unit d. */
+static vec3 trace_from(const struct shade_ctx *c, vec3 o, vec3 d, int depth, double weight, uint64_t seed)
+{
+	struct ray r = { o, d, 0, INFINITY };
+	return trace(c, &r, depth, weight, seed);
+}
+
+/*
+ * The colour seen along ray r (unit direction). weight is the largest
+ * channel of what this ray contributes to the pixel; depth counts bounces.
+ */
+static vec3 trace(const struct shade_ctx *c, const struct ray *r, int depth, double weight, uint64_t seed)
+{
+	struct hit h;
+	if (!accel_intersect(c->a, r, &h) || !v3_finite(h.p))
+		return v3(0, 0, 0);
+	vec3 d = r->d;
+
+	/* face the viewer: the geometric normal decides the side, n follows it */
+	bool entering = v3_dot(h.ng, d) < 0;
+	vec3 ng = entering ? h.ng : v3_neg(h.ng);
+	vec3 n0 = entering ? h.n : v3_neg(h.n);
+	struct shader_point pt = { h.mp, h.u, h.v, n0 };
+	struct shader_mat m;
+	shader_eval(c->s, h.material, &pt, &m);
+	vec3 n = m.n;
+	vec3 v = v3_neg(d);
+	double td = m.transparency < 0 ? 0 : m.transparency > 1 ? 1 : m.transparency;
+
+	vec3 diff, spec;
+	direct(c, h.p, n, ng, v, &m, seed, &diff, &spec);
+	vec3 col = v3_add(v3_scale(v3_mul(m.diff_colour, diff), m.diffuse * (1 - td)),
+			  v3_scale(v3_mul(m.spec_colour, spec), m.specular));
+
+	if (depth >= LIM_TRACE_DEPTH)
+		return col;
+	bool reflections = !c->s->image.no_reflections;
+
+	/* mirror reflection */
+	if (reflections && m.reflection > 0) {
+		vec3 k = v3_scale(m.spec_colour, m.reflection);
+		double w = weight * maxc(k);
+		if (w >= SHADE_MIN_WEIGHT) {
+			vec3 rd = reflect(d, n);
+			if (v3_dot(rd, ng) <= 0) /* a perturbed normal sent it into the surface */
+				rd = reflect(d, ng);
+			vec3 rc = trace_from(c, offset(h.p, ng, rd), rd, depth + 1, w, rng_derive(seed, TAG_REFLECT));
+			col = v3_add(col, v3_mul(k, rc));
+		}
+	}
+
+	/* transparency: refraction, or total internal reflection */
+	if (td > 0) {
+		vec3 k = v3_scale(v3_max(m.tran_colour, v3(0, 0, 0)), td);
+		double w = weight * maxc(k);
+		if (w >= SHADE_MIN_WEIGHT) {
+			double eta = entering ? 1 / m.ior : m.ior;
+			double cosi = -v3_dot(n, d);
+			double k2 = 1 - eta * eta * (1 - cosi * cosi);
+			vec3 nd;
+			bool tir = k2 < 0;
+			if (tir) {
+				nd = reflect(d, n);
+			} else {
+				nd = v3_norm(v3_add(v3_scale(d, eta), v3_scale(n, eta * cosi - sqrt(k2))));
+				if (v3_dot(nd, ng) >= 0) /* perturbed normal: keep it going through */
+					nd = d;
+			}
+			if (!tir || reflections) {
+				vec3 tc = trace_from(c, offset(h.p, ng, nd), nd, depth + 1, w, rng_derive(seed, TAG_REFRACT));
+				col = v3_add(col, v3_mul(k, tc));
+			}
+		}
+	}
+	return col;
+}
+
+vec3 shade_trace(const struct shade_ctx *c, const struct ray *r, uint64_t seed)
+{
+	double len = v3_len(r->d);
+	if (!(len > 0) || !isfinite(len) || !v3_finite(r->o))
+		return v3(0, 0, 0);
+	struct ray u = { r->o, v3_scale(r->d, 1 / len), r->tmin * len, r->tmax * len };
+	return trace(c, &u, 0, 1.0, seed);
+}
