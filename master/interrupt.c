@@ -1,0 +1,217 @@
+/*
+ * interrupt.c - SIGINT and the q/Esc keys end a render early (interrupt.h).
+ */
+#include "master/interrupt.h"
+
+#include <errno.h>
+#include <poll.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <termios.h>
+#include <unistd.h>
+
+/* How long the key thread waits in poll before checking whether to stop. */
+#define KEY_POLL_MS 100
+/* After Esc, bytes arriving within this time make it an escape sequence
+ * (an arrow key, say), not a lone Esc. */
+#define ESC_SEQ_MS 30
+
+static atomic_int *g_cancel;
+static volatile sig_atomic_t g_reason;
+static volatile sig_atomic_t g_sigints;
+static volatile sig_atomic_t g_raw;       /* terminal is in our mode */
+static volatile sig_atomic_t g_want_raw;  /* key watching is on */
+static struct termios g_saved;            /* terminal settings to restore */
+static atomic_int g_stop;
+static pthread_t g_thread;
+static bool g_thread_on, g_active, g_atexit;
+
+static const int g_fatal_sigs[] = { SIGTERM, SIGHUP, SIGQUIT };
+#define N_FATAL ((int)(sizeof g_fatal_sigs / sizeof g_fatal_sigs[0]))
+static struct sigaction g_old_int, g_old_fatal[N_FATAL], g_old_tstp, g_old_cont;
+
+/* Async-signal-safe: tcsetattr is. */
+static void term_restore(void)
+{
+	if (g_raw) {
+		tcsetattr(STDIN_FILENO, TCSANOW, &g_saved);
+		g_raw = 0;
+	}
+}
+
+/* Non-canonical, no echo; signals (Ctrl-C) still work. Only in the foreground. */
+static void term_raw(void)
+{
+	if (g_raw || !g_want_raw || tcgetpgrp(STDIN_FILENO) != getpgrp())
+		return;
+	struct termios t = g_saved;
+	t.c_lflag &= ~(tcflag_t)(ICANON | ECHO);
+	t.c_cc[VMIN] = 1;
+	t.c_cc[VTIME] = 0;
+	if (tcsetattr(STDIN_FILENO, TCSANOW, &t) == 0)
+		g_raw = 1;
+}
+
+static void at_exit_restore(void) { term_restore(); }
+
+static void on_sigint(int sig)
+{
+	if (g_sigints++ > 0) { /* a second Ctrl-C: die the usual way */
+		term_restore();
+		signal(sig, SIG_DFL);
+		raise(sig);
+		return;
+	}
+	g_reason = INTERRUPT_SIGNAL;
+	if (g_cancel)
+		atomic_store(g_cancel, 1);
+}
+
+static void on_fatal(int sig)
+{
+	term_restore();
+	signal(sig, SIG_DFL);
+	raise(sig);
+}
+
+static void on_tstp(int sig)
+{
+	int saved_errno = errno;
+	term_restore();
+	struct sigaction dfl, mine;
+	memset(&dfl, 0, sizeof dfl);
+	dfl.sa_handler = SIG_DFL;
+	sigaction(sig, &dfl, &mine);
+	sigset_t set;
+	sigemptyset(&set);
+	sigaddset(&set, sig);
+	sigprocmask(SIG_UNBLOCK, &set, NULL);
+	raise(sig); /* stops here until SIGCONT */
+	sigaction(sig, &mine, NULL);
+	term_raw();
+	errno = saved_errno;
+}
+
+static void on_cont(int sig)
+{
+	(void)sig;
+	int saved_errno = errno;
+	term_raw();
+	errno = saved_errno;
+}
+
+/* Waits up to ms for a byte on stdin. 1 = readable, 0 = not, -1 = error/EOF. */
+static int wait_key(int ms)
+{
+	struct pollfd pfd = { STDIN_FILENO, POLLIN, 0 };
+	int n = poll(&pfd, 1, ms);
+	if (n < 0)
+		return errno == EINTR ? 0 : -1;
+	if (n == 0)
+		return 0;
+	return (pfd.revents & POLLIN) ? 1 : -1;
+}
+
+static void *key_thread(void *arg)
+{
+	(void)arg;
+	while (!atomic_load(&g_stop)) {
+		int w = wait_key(KEY_POLL_MS);
+		if (w < 0)
+			break;
+		if (w == 0)
+			continue;
+		unsigned char ch;
+		ssize_t n = read(STDIN_FILENO, &ch, 1);
+		if (n <= 0) {
+			if (n < 0 && (errno == EINTR || errno == EAGAIN))
+				continue;
+			break; /* EOF: no more keys */
+		}
+		int stop = ch == 'q' || ch == 'Q';
+		if (ch == 0x1b) {
+			if (wait_key(ESC_SEQ_MS) == 1) { /* an escape sequence: swallow what came */
+				unsigned char junk[64];
+				(void)read(STDIN_FILENO, junk, sizeof junk);
+			} else {
+				stop = 1;
+			}
+		}
+		if (stop) {
+			if (g_reason == INTERRUPT_NONE)
+				g_reason = INTERRUPT_KEY;
+			atomic_store(g_cancel, 1);
+			break;
+		}
+	}
+	return NULL;
+}
+
+int interrupt_start(atomic_int *cancel, bool keys)
+{
+	if (g_active)
+		return -1;
+	g_active = true;
+	g_cancel = cancel;
+	g_reason = INTERRUPT_NONE;
+	g_sigints = 0;
+	atomic_store(&g_stop, 0);
+
+	struct sigaction sa;
+	memset(&sa, 0, sizeof sa);
+	sigemptyset(&sa.sa_mask);
+	sa.sa_handler = on_sigint;
+	sigaction(SIGINT, &sa, &g_old_int);
+
+	g_want_raw = 0;
+	g_thread_on = false;
+	if (keys && isatty(STDIN_FILENO) && tcgetpgrp(STDIN_FILENO) == getpgrp() &&
+	    tcgetattr(STDIN_FILENO, &g_saved) == 0) {
+		if (!g_atexit && atexit(at_exit_restore) == 0)
+			g_atexit = true;
+		sa.sa_handler = on_fatal;
+		for (int i = 0; i < N_FATAL; i++)
+			sigaction(g_fatal_sigs[i], &sa, &g_old_fatal[i]);
+		sa.sa_handler = on_tstp;
+		sigaction(SIGTSTP, &sa, &g_old_tstp);
+		sa.sa_handler = on_cont;
+		sigaction(SIGCONT, &sa, &g_old_cont);
+		g_want_raw = 1;
+		term_raw();
+		if (g_raw && pthread_create(&g_thread, NULL, key_thread, NULL) == 0)
+			g_thread_on = true;
+		if (!g_thread_on) { /* no keys after all: leave the terminal alone */
+			term_restore();
+			g_want_raw = 0;
+		}
+	}
+	return 0;
+}
+
+void interrupt_stop(void)
+{
+	if (!g_active)
+		return;
+	if (g_thread_on) {
+		atomic_store(&g_stop, 1);
+		pthread_join(g_thread, NULL);
+		g_thread_on = false;
+	}
+	if (g_want_raw) {
+		g_want_raw = 0;
+		term_restore();
+		for (int i = 0; i < N_FATAL; i++)
+			sigaction(g_fatal_sigs[i], &g_old_fatal[i], NULL);
+		sigaction(SIGTSTP, &g_old_tstp, NULL);
+		sigaction(SIGCONT, &g_old_cont, NULL);
+	}
+	sigaction(SIGINT, &g_old_int, NULL);
+	g_active = false;
+}
+
+enum interrupt_reason interrupt_reason(void)
+{
+	return (enum interrupt_reason)g_reason;
+}

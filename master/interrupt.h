@@ -1,0 +1,34 @@
+/*
+ * interrupt.h - ending a render early (the manual's `nonstop`, issue 4):
+ * SIGINT always ends it; on a terminal, without `nonstop`, so do q and Esc.
+ * Either way the caller writes the finished part of the image.
+ */
+#ifndef PORTRAY_INTERRUPT_H
+#define PORTRAY_INTERRUPT_H
+
+#include <stdatomic.h>
+#include <stdbool.h>
+
+enum interrupt_reason {
+	INTERRUPT_NONE = 0,
+	INTERRUPT_SIGNAL, /* SIGINT (Ctrl-C) */
+	INTERRUPT_KEY     /* q, Q or Esc on the terminal */
+};
+
+/*
+ * Starts watching until interrupt_stop: SIGINT sets *cancel (a second SIGINT
+ * kills the process the usual way). When keys is true and stdin is a
+ * terminal whose foreground we are, the terminal is put in non-canonical,
+ * no-echo mode and a thread sets *cancel on q, Q or a lone Esc; the terminal
+ * is restored by interrupt_stop, at exit, and before the process dies of
+ * SIGTERM, SIGHUP, SIGQUIT or a second SIGINT, or stops on SIGTSTP (raw mode
+ * comes back on SIGCONT). One watch at a time. Returns 0, or -1 if already
+ * watching.
+ */
+int interrupt_start(atomic_int *cancel, bool keys);
+/* Stops watching; restores the terminal and the previous signal handlers. */
+void interrupt_stop(void);
+/* Why *cancel was set, if by us. */
+enum interrupt_reason interrupt_reason(void);
+
+#endif
