@@ -1,10 +1,164 @@
-/* render.c - placeholder until the renderer lands (issue 3). */
+/*
+ * render.c - portray-master's render command: load the scene, build the
+ * renderer, render locally (or on the farm when workers are named), write
+ * the image. Log lines and the progress bar go to stderr; stdout stays quiet.
+ */
+#include <errno.h>
+#include <stdatomic.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 
+#include "common/filter.h"
+#include "common/img.h"
+#include "common/parse.h"
+#include "common/render.h"
+#include "master/farm.h"
+#include "master/interrupt.h"
 #include "master/master.h"
+#include "master/progress.h"
+
+/* Until master/farm.c lands the farm is optional at link time. */
+#pragma weak farm_render
+
+/* Room for the filter warnings of a camera (LIM_FILTERS lines). */
+#define WARN_BUF 4096
+
+/*
+ * Default output: the scene file's name without directory and extension,
+ * plus ".png", in the current directory. Returns a malloc'd string (caller
+ * frees) or NULL on out of memory.
+ */
+static char *default_output(const char *scene)
+{
+	const char *base = strrchr(scene, '/');
+	base = base ? base + 1 : scene;
+	size_t n = strlen(base);
+	const char *dot = strrchr(base, '.');
+	if (dot && dot != base)
+		n = (size_t)(dot - base);
+	if (n == 0) {
+		base = "portray";
+		n = strlen(base);
+	}
+	char *out = malloc(n + 5);
+	if (!out)
+		return NULL;
+	memcpy(out, base, n);
+	memcpy(out + n, ".png", 5);
+	return out;
+}
 
 int master_render(const struct master_opts *o)
 {
-	fprintf(stderr, "portray-master: %s: renderer not built yet\n", o->scene);
-	return 1;
+	struct scene *s = NULL;
+	struct renderer *r = NULL;
+	uint8_t *image = NULL;
+	char *out_alloc = NULL;
+	struct scene_error err;
+	memset(&err, 0, sizeof err);
+	int rc;
+	bool watching = false;
+	double t0 = progress_now();
+
+	rc = parse_files(o->camera, o->scene, &s, &err);
+	if (rc) {
+		fprintf(stderr, "%s\n", err.msg);
+		goto done;
+	}
+	char warn[WARN_BUF];
+	if (filter_warnings(&s->camera, warn, sizeof warn))
+		fputs(warn, stderr);
+	double t_parse = progress_now();
+
+	rc = renderer_new(s, &r, &err);
+	if (rc) {
+		fprintf(stderr, "%s\n", err.msg);
+		goto done;
+	}
+	if (o->width && renderer_set_size(r, o->width, o->height) < 0) {
+		fprintf(stderr, "portray-master: --size %ux%u is too large (at most %llu pixels)\n",
+			o->width, o->height, (unsigned long long)LIM_IMAGE_PIXELS);
+		rc = EXIT_USAGE;
+		goto done;
+	}
+	uint32_t w, h;
+	renderer_size(r, &w, &h);
+	double t_build = progress_now();
+
+	const char *out = o->out;
+	if (!out) {
+		out = out_alloc = default_output(o->scene);
+		if (!out) {
+			fprintf(stderr, "portray-master: out of memory\n");
+			rc = ERRLEVEL_FATAL;
+			goto done;
+		}
+	}
+	image = calloc((size_t)w * h, 3); /* unfinished pixels stay black */
+	if (!image) {
+		fprintf(stderr, "portray-master: out of memory for a %ux%u image\n", w, h);
+		rc = ERRLEVEL_FATAL;
+		goto done;
+	}
+
+	atomic_int cancel;
+	atomic_init(&cancel, 0);
+	interrupt_start(&cancel, !s->image.nonstop);
+	watching = true;
+	uint64_t total = render_tile_count(w, h, o->tile), finished = 0;
+	int threads = o->threads > 0 ? o->threads : render_ncpus();
+	bool farm = o->workers || o->workers_file;
+	if (farm && !farm_render) {
+		fprintf(stderr, "portray-master: this build has no farm support yet\n");
+		rc = EXIT_USAGE;
+		goto done;
+	}
+	if (farm) {
+		rc = farm_render(o, s, r, w, h, image, &cancel);
+		if (rc && !atomic_load(&cancel))
+			goto done; /* farm_render said why */
+		rc = 0;
+	} else {
+		struct progress prog;
+		progress_init(&prog, total, progress_wanted(o->quiet));
+		struct render_progress cb = { progress_callback, &prog };
+		finished = render_image(r, threads, o->tile, image, &cb, &cancel);
+		progress_end(&prog);
+	}
+	double t_render = progress_now();
+	bool partial = farm ? atomic_load(&cancel) != 0 : finished < total;
+
+	if (img_write(out, image, w, h) < 0) {
+		fprintf(stderr, "portray-master: cannot write %s: %s\n", out, strerror(errno));
+		rc = EXIT_IO;
+		goto done;
+	}
+	if (partial) {
+		const char *why = interrupt_reason() == INTERRUPT_KEY ? "stopped" : "interrupted";
+		if (farm)
+			fprintf(stderr, "portray-master: %s: partial image written to %s\n", why, out);
+		else
+			fprintf(stderr, "portray-master: %s: %llu of %llu tiles (%d%%) written to %s\n", why,
+				(unsigned long long)finished, (unsigned long long)total,
+				(int)(100 * finished / total), out);
+		rc = interrupt_reason() == INTERRUPT_SIGNAL ? EXIT_INTERRUPTED : 0;
+	} else if (!o->quiet && !farm) {
+		double tr = t_render - t_build;
+		uint64_t rays = renderer_rays(r);
+		fprintf(stderr,
+			"portray-master: %s: %ux%u, %d thread%s, %llu tiles, %.2f s (parse %.2f, build %.2f, "
+			"trace %.2f), %llu eye rays, %.2f Mrays/s\n",
+			out, w, h, threads, threads == 1 ? "" : "s", (unsigned long long)total,
+			t_render - t0, t_parse - t0, t_build - t_parse, tr, (unsigned long long)rays,
+			tr > 0 ? rays / tr * 1e-6 : 0.0);
+	}
+done:
+	if (watching)
+		interrupt_stop();
+	free(image);
+	free(out_alloc);
+	renderer_free(r);
+	scene_free(s);
+	return rc;
 }

@@ -1,0 +1,227 @@
+/* test_render.c - the tile renderer and its thread pool (common/render.c):
+ * determinism over threads and tile sizes with every filter on, cancellation,
+ * progress, sizes, ray counts, flat scenes. Scenes built with the builder. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/render.h"
+#include "tests/unit/check.h"
+
+#define W 37
+#define H 23
+
+static void add_filter(struct scene_camera *c, enum filter_kind k)
+{
+	scene_filter_defaults(&c->filters[c->n_filters++], k);
+}
+
+/* A few spheres over a plane, lit by a sphere light (random samples) and a
+ * point light; camera filters as given. */
+static struct scene *make_scene(const struct scene_camera *cam, int with_objects)
+{
+	struct scene_error err;
+	struct scene *s = scene_new();
+	CHECK(s != NULL);
+	CHECK(scene_set_camera(s, cam, &err) == 0);
+	struct scene_image im;
+	scene_image_defaults(&im);
+	im.xsize = W;
+	im.ysize = H;
+	CHECK(scene_set_image(s, &im, &err) == 0);
+	if (!with_objects)
+		return s;
+	struct scene_light l;
+	scene_light_defaults(&l);
+	l.position = v3(3, 5, 4);
+	l.shape = LIGHT_SPHERE;
+	l.sphere.centre = v3(3, 5, 4);
+	l.sphere.radius = 1;
+	l.samples = 3;
+	CHECK(scene_add_light(s, &l, &err) == 0);
+	scene_light_defaults(&l);
+	l.position = v3(-4, 3, 2);
+	l.colour = v3(0.3, 0.3, 0.5);
+	CHECK(scene_add_light(s, &l, &err) == 0);
+	struct scene_material m;
+	scene_material_defaults(&m);
+	m.diff_colour = v3(0.9, 0.3, 0.2);
+	m.specular = 0.5;
+	uint32_t red;
+	CHECK(scene_add_material(s, &m, &red, &err) == 0);
+	for (int i = 0; i < 4; i++) {
+		struct scene_object o;
+		uint32_t id;
+		scene_object_defaults(&o, PRIM_SPHERE);
+		o.u.sphere.centre = v3(-2.4 + 1.6 * i, 0.2 * i, -0.5 * i);
+		o.u.sphere.radius = 0.7;
+		o.material = i % 2 ? red : SCENE_NONE;
+		CHECK(scene_add_object(s, &o, &id, &err) == 0);
+		CHECK(scene_add_root(s, id, &err) == 0);
+	}
+	struct scene_object o;
+	uint32_t id;
+	scene_object_defaults(&o, PRIM_PLANE);
+	o.u.plane.position = v3(0, -1, 0);
+	CHECK(scene_add_object(s, &o, &id, &err) == 0);
+	CHECK(scene_add_root(s, id, &err) == 0);
+	return s;
+}
+
+static struct scene_camera base_camera(void)
+{
+	struct scene_camera c;
+	scene_camera_defaults(&c);
+	c.look_from = v3(0, 2, 9);
+	c.look_at = v3(0, 0, 0);
+	c.depth = 1;
+	c.x_size = 0.8;
+	c.y_size = 0.6;
+	c.n_filters = 0;
+	return c;
+}
+
+static uint64_t calls;
+static uint64_t last_done;
+static void count_progress(void *arg, uint64_t done, uint64_t total)
+{
+	(void)arg;
+	CHECK(done == last_done + 1 && done <= total);
+	last_done = done;
+	calls++;
+}
+
+static uint8_t *render(const struct renderer *r, int threads, uint32_t tile)
+{
+	uint8_t *img = calloc(W * H, 3);
+	uint64_t n = render_image(r, threads, tile, img, NULL, NULL);
+	CHECK(n == render_tile_count(W, H, tile));
+	return img;
+}
+
+int main(void)
+{
+	struct scene_error err;
+	struct renderer *r;
+
+	/* every filter on: adaptive, lens, super-sample, disk */
+	struct scene_camera c = base_camera();
+	add_filter(&c, FILTER_ADAPTIVE);
+	c.filters[0].threshold = 0.05;
+	c.filters[0].max_depth = 2;
+	c.filters[0].cache_size = 50;
+	add_filter(&c, FILTER_LENS);
+	c.filters[1].samples = 2;
+	c.filters[1].radius = 0.05;
+	c.filters[1].focal_length = 9;
+	add_filter(&c, FILTER_SUPERSAMPLE);
+	add_filter(&c, FILTER_DISK);
+	c.filters[3].samples = 2;
+	struct scene *s = make_scene(&c, 1);
+	CHECK(renderer_new(s, &r, &err) == 0);
+	uint32_t w, h;
+	renderer_size(r, &w, &h);
+	CHECK(w == W && h == H);
+	uint8_t *a = render(r, 1, 7);
+	uint8_t *b = render(r, 2, 16);
+	uint8_t *d = render(r, 2, 64);
+	uint8_t *e = render(r, 3, 1);
+	CHECK(memcmp(a, b, W * H * 3) == 0);
+	CHECK(memcmp(a, d, W * H * 3) == 0);
+	CHECK(memcmp(a, e, W * H * 3) == 0);
+	/* the picture is not blank and not flat */
+	int lit = 0, distinct = 0;
+	for (int i = 0; i < W * H * 3; i++) {
+		lit += a[i] > 0;
+		distinct += i >= 3 && a[i] != a[i - 3];
+	}
+	CHECK(lit > W * H / 2 && distinct > W * H / 4);
+	/* an odd rectangle through renderer_tile matches the image */
+	uint8_t tilebuf[9 * 5 * 3];
+	struct tile_rect t = { 13, 11, 9, 5 };
+	renderer_tile(r, t, tilebuf);
+	for (uint32_t j = 0; j < t.h; j++)
+		CHECK(memcmp(tilebuf + j * t.w * 3, a + ((t.y + j) * W + t.x) * 3, t.w * 3) == 0);
+	/* pixels outside the image come back black */
+	struct tile_rect edge = { W - 2, H - 1, 4, 3 };
+	uint8_t eb[4 * 3 * 3];
+	memset(eb, 0x55, sizeof eb);
+	renderer_tile(r, edge, eb);
+	CHECK(memcmp(eb, a + ((H - 1) * W + W - 2) * 3, 6) == 0);
+	CHECK(eb[6] == 0 && eb[4 * 3 * 3 - 1] == 0);
+
+	/* progress: one call per tile, in order; cancellation before the start */
+	calls = last_done = 0;
+	struct render_progress pr = { count_progress, NULL };
+	memset(b, 0, W * H * 3);
+	uint64_t n = render_image(r, 2, 8, b, &pr, NULL);
+	CHECK(n == render_tile_count(W, H, 8) && calls == n && n == 5 * 3);
+	atomic_int cancel;
+	atomic_init(&cancel, 1);
+	memset(b, 0, W * H * 3);
+	CHECK(render_image(r, 2, 8, b, NULL, &cancel) == 0);
+	int any = 0;
+	for (int i = 0; i < W * H * 3; i++)
+		any |= b[i];
+	CHECK(any == 0);
+	t = (struct tile_rect){ 0, 0, 8, 8 };
+	uint8_t big[8 * 8 * 3];
+	CHECK(renderer_tile_cancellable(r, t, big, &cancel) == 0);
+	atomic_store(&cancel, 0);
+	CHECK(renderer_tile_cancellable(r, t, big, &cancel) == 1);
+	CHECK(memcmp(big, a, 8 * 3) == 0);
+
+	/* --size: a new size, refused when absurd */
+	CHECK(renderer_set_size(r, 0, 5) < 0);
+	CHECK(renderer_set_size(r, LIM_IMAGE_SIDE + 1, 5) < 0);
+	CHECK(renderer_set_size(r, 10, 7) == 0);
+	renderer_size(r, &w, &h);
+	CHECK(w == 10 && h == 7);
+	renderer_free(r);
+	scene_free(s);
+	free(a);
+	free(b);
+	free(d);
+	free(e);
+
+	/* standard: exactly one eye ray per pixel; super-sample 1x1 is the same image */
+	c = base_camera();
+	add_filter(&c, FILTER_STANDARD);
+	s = make_scene(&c, 1);
+	CHECK(renderer_new(s, &r, &err) == 0);
+	a = render(r, 2, 16);
+	CHECK(renderer_rays(r) == W * H);
+	renderer_free(r);
+	scene_free(s);
+	add_filter(&c, FILTER_SUPERSAMPLE);
+	c.filters[1].x_samples = c.filters[1].y_samples = 1;
+	s = make_scene(&c, 1);
+	CHECK(renderer_new(s, &r, &err) == 0);
+	b = render(r, 2, 5);
+	CHECK(memcmp(a, b, W * H * 3) == 0);
+	renderer_free(r);
+	scene_free(s);
+	free(a);
+	free(b);
+
+	/* a flat scene (nothing but the black background) is black under every filter */
+	for (int k = FILTER_STANDARD; k <= FILTER_LENS; k++) {
+		c = base_camera();
+		add_filter(&c, k == FILTER_ADAPTIVE ? FILTER_ADAPTIVE : FILTER_STANDARD);
+		if (k > FILTER_ADAPTIVE)
+			add_filter(&c, (enum filter_kind)k);
+		s = make_scene(&c, 0);
+		CHECK(renderer_new(s, &r, &err) == 0);
+		a = render(r, 2, 16);
+		any = 0;
+		for (int i = 0; i < W * H * 3; i++)
+			any |= a[i];
+		CHECK(any == 0);
+		CHECK(renderer_rays(r) >= W * H);
+		free(a);
+		renderer_free(r);
+		scene_free(s);
+	}
+	CHECK(render_ncpus() >= 1);
+	CHECK(render_tile_count(64, 64, 32) == 4 && render_tile_count(65, 64, 32) == 6);
+	TEST_MAIN_END();
+}
