@@ -54,6 +54,14 @@ bool accel_intersect(const struct accel *a, const struct ray *r, struct hit *h);
 /* True if anything is hit in (r->tmin, r->tmax): early exit, for shadow rays. */
 bool accel_occluded(const struct accel *a, const struct ray *r);
 
+/*
+ * Start point for a secondary ray leaving a hit at p (geometric normal ng)
+ * in direction dir: p moved off the surface along ng, to the side dir
+ * leaves by, by 1e-9 * (1 + max |p_i|). Use it with tmin = 0 to avoid
+ * self-intersection acne (see the epsilon strategy in accel.c).
+ */
+vec3 accel_offset_point(vec3 p, vec3 ng, vec3 dir);
+
 /* Brute force reference (no BVH), for tests: same contract as accel_intersect. */
 bool accel_intersect_brute(const struct accel *a, const struct ray *r, struct hit *h);
 

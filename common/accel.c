@@ -1,0 +1,946 @@
+/*
+ * accel.c - the scene's objects as a multi-level BVH.
+ *
+ * A "group" is one BVH over a list of objects: the scene's roots, or the
+ * members of one define (built ONCE, however many instances use it). Inside
+ * a group every object becomes one or more references (32-bit: 2 bits of
+ * kind, 30 bits of index) to:
+ *   spheres    untransformed spheres, packed (centre, radius, object)
+ *   triangles  (mesh slot, triangle): triangles and raw meshes; transformed
+ *              ones are baked into the group's space; untransformed raw
+ *              meshes use the scene's arrays without a copy
+ *   xprims     everything else (transformed spheres, planes, disks,
+ *              cylinders, boxes, polygons, CSG nodes): the ray goes into
+ *              the object's space through its inverse transform
+ *   instances  (inverse transform as 12 floats, define group, object):
+ *              56 bytes each, evaluated in double; the instance's geometry is
+ *              exactly the inverse of that float matrix, used consistently
+ *              for rays, normals and bounds
+ * Unbounded references (planes, CSG with an infinite extent, instances of
+ * groups holding those) sit in a list tested for every ray.
+ *
+ * Rays are never normalised when they change space, so t is the same in
+ * every space and a hit's t is the caller's t.
+ *
+ * EPSILON STRATEGY (no self-intersection acne): all intersection arithmetic
+ * is double; hits are accepted in the open interval (tmin, tmax). Secondary
+ * rays should start at accel_offset_point(p, ng, dir), which moves the hit
+ * point off the surface along the geometric normal, toward the side dir
+ * leaves by, by ACCEL_OFFSET_REL * (1 + max |p_i|); then tmin = 0 is safe.
+ * The offset is ~1e7 times the double rounding error of the tests, and far
+ * below any feature size a scene can express in the SPD's units.
+ */
+#include "common/accel.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "common/bvh.h"
+#include "common/geom.h"
+
+enum { REF_SPHERE = 0, REF_TRI = 1, REF_XPRIM = 2, REF_INST = 3 };
+#define REF_MAKE(k, i) ((uint32_t)(k) << 30 | (uint32_t)(i))
+#define REF_KIND(r) ((r) >> 30)
+#define REF_IDX(r) ((r) & 0x3fffffffu)
+/* references per group: 30 bits of index */
+#define ACCEL_MAX_REFS (1u << 30)
+/* primitives per BVH leaf */
+#define ACCEL_MAX_LEAF 4
+
+struct gsphere {
+	vec3 c;
+	double r2;
+	uint32_t obj;
+};
+
+/* A mesh slot: one raw object or one plain triangle. */
+struct gmesh {
+	const vec3 *v;      /* vertices in the group's space */
+	const vec3 *n;      /* normals in the group's space, or NULL */
+	const vec3 *ov;     /* vertices in the object's own space (for mp, uv) */
+	const uint32_t *ix; /* 3 per triangle */
+	uint32_t obj;
+};
+
+struct gtri {
+	uint32_t mesh, tri;
+};
+
+struct xprim {
+	const struct geom_obj *g;
+	uint32_t obj;
+};
+
+struct ginst {
+	float inv[12]; /* parent -> define space, row-major 3x4 */
+	uint32_t group;
+	uint32_t obj;
+};
+
+struct group {
+	struct bvh bvh;
+	uint32_t *refs; /* bounded references in leaf order */
+	uint32_t n_refs;
+	uint32_t *unb;  /* unbounded references */
+	uint32_t n_unb;
+	struct gsphere *sph;
+	uint32_t n_sph;
+	struct gmesh *mesh;
+	uint32_t n_mesh;
+	struct gtri *tri;
+	uint32_t n_tri;
+	struct xprim *xp;
+	uint32_t n_xp;
+	struct ginst *inst;
+	uint32_t n_inst;
+	vec3 *bake;     /* baked vertices and normals (owned) */
+	struct geom_box bounds; /* of the bounded references */
+	size_t bytes;
+};
+
+struct accel {
+	const struct scene *s;
+	struct geom_obj **gobj;   /* per object, built on demand (owned) */
+	struct group **dgroup;    /* per define, built on first use (owned) */
+	struct group *root;
+	struct accel_stats st;
+};
+
+static const uint32_t tri_ix012[3] = { 0, 1, 2 };
+
+/* ---- rays ------------------------------------------------------------------------ */
+
+struct trace {
+	vec3 o, d;
+	double inv[3];
+	int sgn[3];
+	double inv_dd;
+	struct geom_wray w;
+	double tmin, tmax;
+};
+
+static void trace_init(struct trace *r, vec3 o, vec3 d, double tmin, double tmax)
+{
+	r->o = o;
+	r->d = d;
+	double dd[3] = { d.x, d.y, d.z };
+	for (int k = 0; k < 3; k++) {
+		/* a zero component gets a huge finite inverse: no inf * 0 = NaN */
+		r->inv[k] = fabs(dd[k]) > 1e-300 ? 1.0 / dd[k] : copysign(1e300, dd[k]);
+		r->sgn[k] = r->inv[k] < 0;
+	}
+	double a = v3_dot(d, d);
+	r->inv_dd = a > 0 ? 1.0 / a : 0;
+	geom_wray_init(&r->w, o, d);
+	r->tmin = tmin;
+	r->tmax = tmax;
+}
+
+/* Robust slab test (Ize 2013): exact float bounds, double arithmetic, and
+ * the far distance widened by 2 gamma(3) to cover the rounding. */
+static inline bool node_hit(const struct bvh_node *nd, const struct trace *r, double *tnear)
+{
+	double tx0 = ((double)nd->b[r->sgn[0]][0] - r->o.x) * r->inv[0];
+	double tx1 = ((double)nd->b[1 - r->sgn[0]][0] - r->o.x) * r->inv[0];
+	double ty0 = ((double)nd->b[r->sgn[1]][1] - r->o.y) * r->inv[1];
+	double ty1 = ((double)nd->b[1 - r->sgn[1]][1] - r->o.y) * r->inv[1];
+	double tz0 = ((double)nd->b[r->sgn[2]][2] - r->o.z) * r->inv[2];
+	double tz1 = ((double)nd->b[1 - r->sgn[2]][2] - r->o.z) * r->inv[2];
+	double t0 = tx0 > r->tmin ? tx0 : r->tmin;
+	t0 = ty0 > t0 ? ty0 : t0;
+	t0 = tz0 > t0 ? tz0 : t0;
+	double t1 = tx1 < r->tmax ? tx1 : r->tmax;
+	t1 = ty1 < t1 ? ty1 : t1;
+	t1 = tz1 < t1 ? tz1 : t1;
+	t1 += fabs(t1) * 4.5e-16; /* 1 + 2 gamma(3) for doubles, rounded up */
+	*tnear = t0;
+	return t0 <= t1;
+}
+
+/* ---- candidates and hits ---------------------------------------------------------- */
+
+struct cand {
+	uint32_t ref;
+	double t, b1, b2;
+	int part;
+	struct hit sub; /* instances and CSG: the finished hit in the group's space */
+};
+
+static bool group_hit(const struct accel *A, const struct group *g, struct trace *r, struct hit *h, bool brute);
+static bool group_occluded(const struct accel *A, const struct group *g, struct trace *r);
+
+static inline bool sphere_test(const struct gsphere *sp, const struct trace *r, double *t)
+{
+	vec3 oc = v3_sub(r->o, sp->c);
+	double b = v3_dot(oc, r->d);
+	double tc = -b * r->inv_dd;
+	vec3 f = v3_add(oc, v3_scale(r->d, tc));
+	double h2 = (sp->r2 - v3_dot(f, f)) * r->inv_dd;
+	if (h2 < 0)
+		return false;
+	double hh = sqrt(h2);
+	double q = tc + (tc >= 0 ? hh : -hh);
+	double c = v3_dot(oc, oc) - sp->r2;
+	double other = q != 0 ? c * r->inv_dd / q : 0;
+	double t0 = q < other ? q : other, t1 = q < other ? other : q;
+	if (t0 > r->tmin && t0 < r->tmax) {
+		*t = t0;
+		return true;
+	}
+	if (t1 > r->tmin && t1 < r->tmax) {
+		*t = t1;
+		return true;
+	}
+	return false;
+}
+
+static inline const uint32_t *tri_ix(const struct gmesh *m, uint32_t tri) { return m->ix + 3 * (size_t)tri; }
+
+static void inst_matrix(const struct ginst *in, mat34 *m)
+{
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 4; j++)
+			m->m[i][j] = in->inv[4 * i + j];
+}
+
+/*
+ * Intersects instance `in` with r (parent space); on a hit closer than
+ * r->tmax fills *h in the parent space (h->p excepted) and returns true.
+ */
+static bool inst_hit(const struct accel *A, const struct ginst *in, const struct trace *r, struct hit *h, bool brute)
+{
+	mat34 inv;
+	inst_matrix(in, &inv);
+	struct trace lr;
+	trace_init(&lr, m34_point(&inv, r->o), m34_dir(&inv, r->d), r->tmin, r->tmax);
+	struct hit lh;
+	if (!group_hit(A, A->dgroup[in->group], &lr, &lh, brute))
+		return false;
+	h->t = lh.t;
+	h->n = v3_norm(m34_normal(&inv, lh.n));
+	h->ng = v3_norm(m34_normal(&inv, lh.ng));
+	h->u = lh.u;
+	h->v = lh.v;
+	h->object = lh.object;
+	uint32_t im = A->s->objects[in->obj].material;
+	if (lh.material == SCENE_NONE && im != SCENE_NONE) {
+		h->material = im;
+		h->mp = lh.p; /* the instance's own object space is the define's space */
+	} else {
+		h->material = lh.material;
+		h->mp = lh.mp;
+	}
+	return true;
+}
+
+static bool inst_occluded(const struct accel *A, const struct ginst *in, const struct trace *r)
+{
+	mat34 inv;
+	inst_matrix(in, &inv);
+	struct trace lr;
+	trace_init(&lr, m34_point(&inv, r->o), m34_dir(&inv, r->d), r->tmin, r->tmax);
+	return group_occluded(A, A->dgroup[in->group], &lr);
+}
+
+/* Tests one reference; on a hit closer than r->tmax records it in *c and
+ * shrinks r->tmax. */
+static inline bool ref_test(const struct accel *A, const struct group *g, uint32_t ref, struct trace *r,
+			    struct cand *c, bool brute)
+{
+	uint32_t i = REF_IDX(ref);
+	double t;
+	switch (REF_KIND(ref)) {
+	case REF_SPHERE:
+		if (!sphere_test(&g->sph[i], r, &t))
+			return false;
+		break;
+	case REF_TRI: {
+		const struct gmesh *m = &g->mesh[g->tri[i].mesh];
+		const uint32_t *ix = tri_ix(m, g->tri[i].tri);
+		double b1, b2;
+		if (!geom_tri_hit(&r->w, m->v[ix[0]], m->v[ix[1]], m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2))
+			return false;
+		c->b1 = b1;
+		c->b2 = b2;
+		break;
+	}
+	case REF_XPRIM: {
+		const struct xprim *x = &g->xp[i];
+		if (x->g->kind == PRIM_CSG) {
+			struct hit hh;
+			if (!csg_hit(A->s, (struct geom_obj *const *)A->gobj, x->obj, r->o, r->d, r->tmin, r->tmax, &hh))
+				return false;
+			t = hh.t;
+			c->sub = hh;
+			break;
+		}
+		vec3 o = r->o, d = r->d;
+		if (x->g->has_xform) {
+			o = m34_point(&x->g->inv, o);
+			d = m34_dir(&x->g->inv, d);
+		}
+		int part;
+		if (!geom_intersect(x->g, o, d, r->tmin, r->tmax, &t, &part))
+			return false;
+		c->part = part;
+		break;
+	}
+	default: {
+		struct hit hh;
+		if (!inst_hit(A, &g->inst[i], r, &hh, brute))
+			return false;
+		t = hh.t;
+		c->sub = hh;
+		break;
+	}
+	}
+	c->ref = ref;
+	c->t = t;
+	r->tmax = t;
+	return true;
+}
+
+/* Any hit in (tmin, tmax) of one reference. */
+static inline bool ref_occludes(const struct accel *A, const struct group *g, uint32_t ref, struct trace *r)
+{
+	uint32_t i = REF_IDX(ref);
+	if (REF_KIND(ref) == REF_INST)
+		return inst_occluded(A, &g->inst[i], r);
+	struct cand c;
+	double tmax = r->tmax;
+	bool hit = ref_test(A, g, ref, r, &c, false);
+	r->tmax = tmax;
+	return hit;
+}
+
+/* Completes the hit of candidate c in the group's space. */
+static void finish(const struct accel *A, const struct group *g, const struct trace *r, const struct cand *c,
+		   struct hit *h)
+{
+	const struct scene *s = A->s;
+	uint32_t i = REF_IDX(c->ref);
+	vec3 p = v3_add(r->o, v3_scale(r->d, c->t));
+	switch (REF_KIND(c->ref)) {
+	case REF_SPHERE: {
+		const struct gsphere *sp = &g->sph[i];
+		struct geom_obj go;
+		geom_obj_init(s, sp->obj, &go); /* sphere: no allocation */
+		geom_surface(&go, p, GEOM_PART_MAIN, &h->n, &h->u, &h->v);
+		h->ng = h->n;
+		h->mp = p;
+		h->object = sp->obj;
+		h->material = s->objects[sp->obj].material;
+		break;
+	}
+	case REF_TRI: {
+		const struct gmesh *m = &g->mesh[g->tri[i].mesh];
+		const uint32_t *ix = tri_ix(m, g->tri[i].tri);
+		double w0 = 1 - c->b1 - c->b2;
+		vec3 a = m->v[ix[0]], b = m->v[ix[1]], cc = m->v[ix[2]];
+		h->ng = v3_norm(v3_cross(v3_sub(b, a), v3_sub(cc, a)));
+		h->n = h->ng;
+		if (m->n) {
+			vec3 sn = v3_add(v3_add(v3_scale(m->n[ix[0]], w0), v3_scale(m->n[ix[1]], c->b1)),
+					 v3_scale(m->n[ix[2]], c->b2));
+			if (v3_len(sn) > 0) {
+				h->n = v3_norm(sn);
+				if (v3_dot(h->ng, h->n) < 0)
+					h->ng = v3_neg(h->ng);
+			}
+		}
+		vec3 oa = m->ov[ix[0]], ob = m->ov[ix[1]], oc = m->ov[ix[2]];
+		h->mp = v3_add(v3_add(v3_scale(oa, w0), v3_scale(ob, c->b1)), v3_scale(oc, c->b2));
+		geom_tri_uv(oa, ob, oc, h->mp, &h->u, &h->v);
+		h->object = m->obj;
+		h->material = s->objects[m->obj].material;
+		break;
+	}
+	case REF_XPRIM:
+		if (g->xp[i].g->kind == PRIM_CSG) {
+			*h = c->sub; /* CSG carries a finished hit */
+		} else {
+			const struct geom_obj *go = g->xp[i].g;
+			vec3 lp = go->has_xform ? m34_point(&go->inv, p) : p;
+			vec3 n;
+			geom_surface(go, lp, c->part, &n, &h->u, &h->v);
+			if (go->has_xform)
+				n = v3_norm(m34_normal(&go->inv, n));
+			h->n = h->ng = n;
+			h->mp = lp;
+			h->object = g->xp[i].obj;
+			h->material = s->objects[h->object].material;
+		}
+		break;
+	default:
+		*h = c->sub;
+		break;
+	}
+	h->t = c->t;
+	h->p = p;
+}
+
+/* Closest hit in group g; fills *h (group space) only on success. */
+static bool group_hit(const struct accel *A, const struct group *g, struct trace *r, struct hit *h, bool brute)
+{
+	struct cand best;
+	bool found = false;
+	for (uint32_t k = 0; k < g->n_unb; k++)
+		found |= ref_test(A, g, g->unb[k], r, &best, brute);
+	if (brute) {
+		for (uint32_t k = 0; k < g->n_refs; k++)
+			found |= ref_test(A, g, g->refs[k], r, &best, brute);
+	} else if (g->bvh.n_nodes) {
+		const struct bvh_node *nodes = g->bvh.nodes;
+		uint32_t stack[BVH_MAX_DEPTH + 1];
+		double stack_t[BVH_MAX_DEPTH + 1];
+		int sp = 0;
+		double tn;
+		uint32_t ni = 0;
+		if (!node_hit(&nodes[0], r, &tn))
+			goto done;
+		for (;;) {
+			const struct bvh_node *nd = &nodes[ni];
+			if (nd->n) {
+				for (uint32_t k = 0; k < nd->n; k++)
+					found |= ref_test(A, g, g->refs[nd->idx + k], r, &best, false);
+			} else {
+				double t0, t1;
+				bool h0 = node_hit(&nodes[nd->idx], r, &t0);
+				bool h1 = node_hit(&nodes[nd->idx + 1], r, &t1);
+				if (h0 && h1) {
+					uint32_t near = nd->idx, far = nd->idx + 1;
+					if (t1 < t0) {
+						near = far, far = nd->idx;
+						double tt = t0;
+						t0 = t1, t1 = tt;
+					}
+					stack[sp] = far;
+					stack_t[sp++] = t1;
+					ni = near;
+					continue;
+				}
+				if (h0 || h1) {
+					ni = h0 ? nd->idx : nd->idx + 1;
+					continue;
+				}
+			}
+			/* pop the next subtree still in front of the closest hit */
+			for (;;) {
+				if (sp == 0)
+					goto done;
+				sp--;
+				if (stack_t[sp] <= r->tmax)
+					break;
+			}
+			ni = stack[sp];
+		}
+	}
+done:
+	if (found)
+		finish(A, g, r, &best, h);
+	return found;
+}
+
+static bool group_occluded(const struct accel *A, const struct group *g, struct trace *r)
+{
+	for (uint32_t k = 0; k < g->n_unb; k++)
+		if (ref_occludes(A, g, g->unb[k], r))
+			return true;
+	if (!g->bvh.n_nodes)
+		return false;
+	const struct bvh_node *nodes = g->bvh.nodes;
+	uint32_t stack[BVH_MAX_DEPTH + 1];
+	int sp = 0;
+	double tn;
+	uint32_t ni = 0;
+	if (!node_hit(&nodes[0], r, &tn))
+		return false;
+	for (;;) {
+		const struct bvh_node *nd = &nodes[ni];
+		if (nd->n) {
+			for (uint32_t k = 0; k < nd->n; k++)
+				if (ref_occludes(A, g, g->refs[nd->idx + k], r))
+					return true;
+		} else {
+			double t0, t1;
+			bool h0 = node_hit(&nodes[nd->idx], r, &t0);
+			bool h1 = node_hit(&nodes[nd->idx + 1], r, &t1);
+			if (h0 && h1) {
+				stack[sp++] = nd->idx + 1;
+				ni = nd->idx;
+				continue;
+			}
+			if (h0 || h1) {
+				ni = h0 ? nd->idx : nd->idx + 1;
+				continue;
+			}
+		}
+		if (sp == 0)
+			return false;
+		ni = stack[--sp];
+	}
+}
+
+/* ---- public queries ----------------------------------------------------------------- */
+
+static bool ray_ok(const struct ray *r)
+{
+	return v3_finite(r->o) && v3_finite(r->d) && v3_dot(r->d, r->d) > 0 && !isnan(r->tmin) &&
+	       !isnan(r->tmax) && r->tmin < r->tmax;
+}
+
+bool accel_intersect(const struct accel *a, const struct ray *r, struct hit *h)
+{
+	if (!a->root || !ray_ok(r))
+		return false;
+	struct trace t;
+	trace_init(&t, r->o, r->d, r->tmin, r->tmax);
+	return group_hit(a, a->root, &t, h, false);
+}
+
+bool accel_intersect_brute(const struct accel *a, const struct ray *r, struct hit *h)
+{
+	if (!a->root || !ray_ok(r))
+		return false;
+	struct trace t;
+	trace_init(&t, r->o, r->d, r->tmin, r->tmax);
+	return group_hit(a, a->root, &t, h, true);
+}
+
+bool accel_occluded(const struct accel *a, const struct ray *r)
+{
+	if (!a->root || !ray_ok(r))
+		return false;
+	struct trace t;
+	trace_init(&t, r->o, r->d, r->tmin, r->tmax);
+	return group_occluded(a, a->root, &t);
+}
+
+void accel_get_stats(const struct accel *a, struct accel_stats *st) { *st = a->st; }
+
+/* ---- building ------------------------------------------------------------------------ */
+
+static void group_free(struct group *g)
+{
+	if (!g)
+		return;
+	bvh_free(&g->bvh);
+	free(g->refs);
+	free(g->unb);
+	free(g->sph);
+	free(g->mesh);
+	free(g->tri);
+	free(g->xp);
+	free(g->inst);
+	free(g->bake);
+	free(g);
+}
+
+void accel_free(struct accel *a)
+{
+	if (!a)
+		return;
+	if (a->gobj) {
+		for (uint32_t i = 0; i < a->s->n_objects; i++) {
+			geom_obj_clear(a->gobj[i]);
+			free(a->gobj[i]);
+		}
+		free(a->gobj);
+	}
+	if (a->dgroup) {
+		for (uint32_t i = 0; i < a->s->n_defines; i++)
+			group_free(a->dgroup[i]);
+		free(a->dgroup);
+	}
+	group_free(a->root);
+	free(a);
+}
+
+/* The geom_obj of object i, made on first use; NULL when out of memory. */
+static struct geom_obj *get_gobj(struct accel *A, uint32_t i)
+{
+	if (!A->gobj[i]) {
+		struct geom_obj *g = malloc(sizeof *g);
+		if (!g)
+			return NULL;
+		if (geom_obj_init(A->s, i, g) < 0) {
+			free(g);
+			return NULL;
+		}
+		A->gobj[i] = g;
+		A->st.bytes += sizeof *g;
+		if (g->kind == PRIM_POLYGON)
+			A->st.bytes += g->u.poly.n_points * 2 * sizeof(double);
+	}
+	return A->gobj[i];
+}
+
+/* Makes the geom_obj of obj and of everything below it (CSG subtrees). */
+static int prep_tree(struct accel *A, uint32_t obj)
+{
+	if (!get_gobj(A, obj))
+		return -1;
+	const struct scene_object *o = &A->s->objects[obj];
+	if (o->kind == PRIM_CSG)
+		return prep_tree(A, o->u.csg.operand1) || prep_tree(A, o->u.csg.operand2) ? -1 : 0;
+	if (o->kind == PRIM_INSTANCE) {
+		const struct scene_define *d = &A->s->defines[o->u.instance.define];
+		for (uint32_t k = 0; k < d->n_objects; k++)
+			if (prep_tree(A, d->objects[k]))
+				return -1;
+	}
+	return 0;
+}
+
+/* Pads a box by a relative epsilon so double rounding never culls a hit. */
+static struct geom_box pad_box(struct geom_box b)
+{
+	double m = fmax(fmax(fabs(b.lo.x), fabs(b.lo.y)), fmax(fabs(b.lo.z), fabs(b.hi.x)));
+	m = fmax(m, fmax(fabs(b.hi.y), fabs(b.hi.z)));
+	double e = 1e-9 * m + 1e-300;
+	vec3 ev = v3(e, e, e);
+	b.lo = v3_sub(b.lo, ev);
+	b.hi = v3_add(b.hi, ev);
+	return b;
+}
+
+static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t n, struct scene_error *err);
+
+/* The group of define d, built once. */
+static struct group *define_group(struct accel *A, uint32_t d, struct scene_error *err)
+{
+	if (!A->dgroup[d])
+		A->dgroup[d] = build_group(A, A->s->defines[d].objects, A->s->defines[d].n_objects, err);
+	return A->dgroup[d];
+}
+
+static void float_inverse(const mat34 *inv, struct ginst *gi, mat34 *rounded)
+{
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 4; j++) {
+			gi->inv[4 * i + j] = (float)inv->m[i][j];
+			rounded->m[i][j] = gi->inv[4 * i + j];
+		}
+}
+
+/*
+ * Builds the group over objects objs[0..n). Returns NULL with err filled on
+ * failure (out of memory or too many primitives).
+ */
+static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t n, struct scene_error *err)
+{
+	const struct scene *s = A->s;
+	struct group *g = calloc(1, sizeof *g);
+	struct geom_box *boxes = NULL;
+	uint32_t *all = NULL, *perm = NULL;
+	if (!g)
+		goto oom;
+	/* pass 1: counts */
+	uint64_t n_sph = 0, n_mesh = 0, n_tri = 0, n_xp = 0, n_inst = 0, n_bake = 0;
+	for (uint32_t k = 0; k < n; k++) {
+		const struct scene_object *o = &s->objects[objs[k]];
+		switch (o->kind) {
+		case PRIM_SPHERE:
+			if (o->has_xform)
+				n_xp++;
+			else
+				n_sph++;
+			break;
+		case PRIM_TRIANGLE:
+			n_mesh++, n_tri++;
+			n_bake += 3 + (o->u.triangle.has_normals ? 3 : 0) + (o->has_xform ? 3 : 0);
+			break;
+		case PRIM_RAW: {
+			const struct scene_mesh *m = &s->meshes[o->u.raw.mesh];
+			n_mesh++;
+			n_tri += m->n_triangles;
+			if (o->has_xform)
+				n_bake += (uint64_t)m->n_vertices * (m->normals ? 2 : 1);
+			break;
+		}
+		case PRIM_INSTANCE:
+			n_inst++;
+			break;
+		default:
+			n_xp++;
+			break;
+		}
+	}
+	uint64_t n_all = n_sph + n_tri + n_xp + n_inst;
+	if (n_all >= ACCEL_MAX_REFS) {
+		scene_errorf(err, ERRLEVEL_FATAL, "error: too many primitives in one group (%llu)",
+			     (unsigned long long)n_all);
+		goto fail;
+	}
+	g->sph = malloc((n_sph ? n_sph : 1) * sizeof *g->sph);
+	g->mesh = malloc((n_mesh ? n_mesh : 1) * sizeof *g->mesh);
+	g->tri = malloc((n_tri ? n_tri : 1) * sizeof *g->tri);
+	g->xp = malloc((n_xp ? n_xp : 1) * sizeof *g->xp);
+	g->inst = malloc((n_inst ? n_inst : 1) * sizeof *g->inst);
+	g->bake = malloc((n_bake ? n_bake : 1) * sizeof *g->bake);
+	all = malloc((n_all ? n_all : 1) * sizeof *all);
+	boxes = malloc((n_all ? n_all : 1) * sizeof *boxes);
+	if (!g->sph || !g->mesh || !g->tri || !g->xp || !g->inst || !g->bake || !all || !boxes)
+		goto oom;
+	g->bytes = sizeof *g + n_sph * sizeof *g->sph + n_mesh * sizeof *g->mesh + n_tri * sizeof *g->tri +
+		   n_xp * sizeof *g->xp + n_inst * sizeof *g->inst + n_bake * sizeof *g->bake;
+
+	/* pass 2: fill; bounded references go to all[]/boxes[], the rest to unb */
+	uint32_t n_bounded = 0, n_unb = 0;
+	uint32_t *unb = malloc((n_all ? n_all : 1) * sizeof *unb);
+	if (!unb)
+		goto oom;
+	g->unb = unb;
+	size_t nb = 0;
+	for (uint32_t k = 0; k < n; k++) {
+		uint32_t oi = objs[k];
+		const struct scene_object *o = &s->objects[oi];
+		struct geom_box bx;
+		uint32_t ref;
+		if (o->kind == PRIM_SPHERE && !o->has_xform) {
+			struct gsphere *sp = &g->sph[g->n_sph];
+			sp->c = o->u.sphere.centre;
+			sp->r2 = o->u.sphere.radius * o->u.sphere.radius;
+			sp->obj = oi;
+			vec3 rr = v3(o->u.sphere.radius, o->u.sphere.radius, o->u.sphere.radius);
+			bx.lo = v3_sub(sp->c, rr);
+			bx.hi = v3_add(sp->c, rr);
+			all[n_bounded] = REF_MAKE(REF_SPHERE, g->n_sph++);
+			boxes[n_bounded++] = pad_box(bx);
+			continue;
+		}
+		if (o->kind == PRIM_TRIANGLE || o->kind == PRIM_RAW) {
+			struct gmesh *m = &g->mesh[g->n_mesh];
+			memset(m, 0, sizeof *m);
+			m->obj = oi;
+			uint32_t ntri;
+			mat34 inv;
+			if (o->has_xform && !m34_invert(&o->xform, &inv))
+				inv = m34_identity();
+			if (o->kind == PRIM_TRIANGLE) {
+				const struct prim_triangle *t = &o->u.triangle;
+				vec3 *v = &g->bake[nb];
+				v[0] = t->a, v[1] = t->b, v[2] = t->c;
+				nb += 3;
+				m->ov = v;
+				m->v = v;
+				if (o->has_xform) {
+					vec3 *w = &g->bake[nb];
+					for (int q = 0; q < 3; q++)
+						w[q] = m34_point(&o->xform, v[q]);
+					nb += 3;
+					m->v = w;
+				}
+				if (t->has_normals) {
+					vec3 *nn = &g->bake[nb];
+					nn[0] = t->na, nn[1] = t->nb, nn[2] = t->nc;
+					if (o->has_xform)
+						for (int q = 0; q < 3; q++)
+							nn[q] = m34_normal(&inv, nn[q]);
+					nb += 3;
+					m->n = nn;
+				}
+				m->ix = tri_ix012;
+				ntri = 1;
+			} else {
+				const struct scene_mesh *sm = &s->meshes[o->u.raw.mesh];
+				m->ov = sm->vertices;
+				m->v = sm->vertices;
+				m->n = sm->normals;
+				m->ix = sm->tris;
+				if (o->has_xform) {
+					vec3 *w = &g->bake[nb];
+					for (uint32_t q = 0; q < sm->n_vertices; q++)
+						w[q] = m34_point(&o->xform, sm->vertices[q]);
+					nb += sm->n_vertices;
+					m->v = w;
+					if (sm->normals) {
+						vec3 *nn = &g->bake[nb];
+						for (uint32_t q = 0; q < sm->n_vertices; q++)
+							nn[q] = m34_normal(&inv, sm->normals[q]);
+						nb += sm->n_vertices;
+						m->n = nn;
+					}
+				}
+				ntri = sm->n_triangles;
+			}
+			for (uint32_t q = 0; q < ntri; q++) {
+				const uint32_t *ix = tri_ix(m, q);
+				struct geom_box tb = geom_box_empty();
+				for (int c = 0; c < 3; c++)
+					tb = geom_box_point(tb, m->v[ix[c]]);
+				g->tri[g->n_tri].mesh = g->n_mesh;
+				g->tri[g->n_tri].tri = q;
+				all[n_bounded] = REF_MAKE(REF_TRI, g->n_tri++);
+				boxes[n_bounded++] = pad_box(tb);
+			}
+			g->n_mesh++;
+			continue;
+		}
+		if (o->kind == PRIM_INSTANCE) {
+			struct group *sub = define_group(A, o->u.instance.define, err);
+			if (!sub)
+				goto fail;
+			if (sub->n_refs == 0 && sub->n_unb == 0)
+				continue; /* an empty define draws nothing */
+			struct ginst *gi = &g->inst[g->n_inst];
+			gi->group = o->u.instance.define;
+			gi->obj = oi;
+			mat34 inv = m34_identity(), rinv, fwd;
+			if (o->has_xform && !m34_invert(&o->xform, &inv))
+				inv = m34_identity();
+			float_inverse(&inv, gi, &rinv);
+			if (!m34_invert(&rinv, &fwd)) {
+				scene_errorf(err, ERRLEVEL_FATAL, "error: instance transform is singular in single precision");
+				goto fail;
+			}
+			ref = REF_MAKE(REF_INST, g->n_inst++);
+			A->st.n_instances++;
+			if (sub->n_unb) {
+				unb[n_unb++] = ref;
+				continue;
+			}
+			bx = pad_box(geom_box_xform(&fwd, sub->bounds));
+			all[n_bounded] = ref;
+			boxes[n_bounded++] = bx;
+			continue;
+		}
+		/* xprim */
+		if (prep_tree(A, oi) < 0)
+			goto oom;
+		struct xprim *xp = &g->xp[g->n_xp];
+		xp->g = A->gobj[oi];
+		xp->obj = oi;
+		ref = REF_MAKE(REF_XPRIM, g->n_xp++);
+		bx = csg_bounds(s, (struct geom_obj *const *)A->gobj, oi);
+		if (bx.lo.x > bx.hi.x || bx.lo.y > bx.hi.y || bx.lo.z > bx.hi.z)
+			continue; /* empty: nothing to draw (e.g. disjoint intersect) */
+		if (!geom_box_finite(bx)) {
+			unb[n_unb++] = ref;
+			continue;
+		}
+		all[n_bounded] = ref;
+		boxes[n_bounded++] = pad_box(bx);
+	}
+	g->n_unb = n_unb;
+	g->n_refs = n_bounded;
+	A->st.n_prims += g->n_sph + g->n_tri + g->n_xp;
+
+	/* pass 3: the BVH over the bounded references */
+	perm = malloc((n_bounded ? n_bounded : 1) * sizeof *perm);
+	g->refs = malloc((n_bounded ? n_bounded : 1) * sizeof *g->refs);
+	if (!perm || !g->refs)
+		goto oom;
+	if (bvh_build(&g->bvh, boxes, n_bounded, perm, ACCEL_MAX_LEAF) < 0)
+		goto oom;
+	g->bounds = geom_box_empty();
+	for (uint32_t k = 0; k < n_bounded; k++) {
+		g->refs[k] = all[perm[k]];
+		g->bounds = geom_box_union(g->bounds, boxes[k]);
+	}
+	g->bytes += (size_t)g->bvh.n_nodes * sizeof(struct bvh_node) + (size_t)(n_bounded + n_unb) * sizeof(uint32_t);
+	A->st.n_nodes += g->bvh.n_nodes;
+	A->st.bytes += g->bytes;
+	free(perm);
+	free(all);
+	free(boxes);
+	return g;
+oom:
+	scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
+fail:
+	free(perm);
+	free(all);
+	free(boxes);
+	group_free(g);
+	return NULL;
+}
+
+/*
+ * Rejects graphs the tracer's recursion would not survive: CSG nesting over
+ * LIM_CSG_DEPTH or define nesting over LIM_DEFINE_DEPTH. Children always
+ * have smaller indices, so one forward pass computes every depth.
+ */
+static int check_depths(const struct scene *s, struct scene_error *err)
+{
+	uint16_t *cd = calloc((size_t)s->n_objects + 1, sizeof *cd);
+	uint16_t *dd = calloc((size_t)s->n_objects + 1, sizeof *dd);
+	int32_t *def_cd = malloc(((size_t)s->n_defines + 1) * sizeof *def_cd);
+	int32_t *def_dd = malloc(((size_t)s->n_defines + 1) * sizeof *def_dd);
+	int rc = 0;
+	if (!cd || !dd || !def_cd || !def_dd) {
+		rc = scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
+		goto out;
+	}
+	for (uint32_t i = 0; i < s->n_defines; i++)
+		def_cd[i] = def_dd[i] = -1;
+	for (uint32_t i = 0; i < s->n_objects; i++) {
+		const struct scene_object *o = &s->objects[i];
+		unsigned c = 0, d = 0;
+		if (o->kind == PRIM_CSG) {
+			uint32_t a = o->u.csg.operand1, b = o->u.csg.operand2;
+			c = 1u + (cd[a] > cd[b] ? cd[a] : cd[b]);
+			d = dd[a] > dd[b] ? dd[a] : dd[b];
+		} else if (o->kind == PRIM_INSTANCE) {
+			uint32_t df = o->u.instance.define;
+			if (def_cd[df] < 0) {
+				unsigned mc = 0, md = 0;
+				const struct scene_define *D = &s->defines[df];
+				for (uint32_t k = 0; k < D->n_objects; k++) {
+					uint32_t m = D->objects[k];
+					mc = cd[m] > mc ? cd[m] : mc;
+					md = dd[m] > md ? dd[m] : md;
+				}
+				def_cd[df] = (int32_t)mc;
+				def_dd[df] = (int32_t)md;
+			}
+			c = (unsigned)def_cd[df];
+			d = 1u + (unsigned)def_dd[df];
+		}
+		if (c > LIM_CSG_DEPTH || d > LIM_DEFINE_DEPTH) {
+			const char *f = o->loc.file ? o->loc.file : "<scene>";
+			rc = scene_errorf(err, ERRLEVEL_FATAL, "%s:%d:%d: error: %s nested deeper than %d", f,
+					  o->loc.line, o->loc.col, c > LIM_CSG_DEPTH ? "csg" : "definition",
+					  c > LIM_CSG_DEPTH ? LIM_CSG_DEPTH : LIM_DEFINE_DEPTH);
+			goto out;
+		}
+		cd[i] = (uint16_t)c;
+		dd[i] = (uint16_t)d;
+	}
+out:
+	free(cd);
+	free(dd);
+	free(def_cd);
+	free(def_dd);
+	return rc;
+}
+
+int accel_build(const struct scene *s, struct accel **out, struct scene_error *err)
+{
+	struct timespec t0, t1;
+	clock_gettime(CLOCK_MONOTONIC, &t0);
+	*out = NULL;
+	int rc = check_depths(s, err);
+	if (rc)
+		return rc;
+	struct accel *A = calloc(1, sizeof *A);
+	if (!A)
+		return scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
+	A->s = s;
+	A->gobj = calloc((size_t)s->n_objects + 1, sizeof *A->gobj);
+	A->dgroup = calloc((size_t)s->n_defines + 1, sizeof *A->dgroup);
+	if (!A->gobj || !A->dgroup) {
+		accel_free(A);
+		return scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
+	}
+	A->st.bytes = sizeof *A + ((size_t)s->n_objects + s->n_defines) * sizeof(void *);
+	A->root = build_group(A, s->roots, s->n_roots, err);
+	if (!A->root) {
+		accel_free(A);
+		return err ? err->level : ERRLEVEL_FATAL;
+	}
+	clock_gettime(CLOCK_MONOTONIC, &t1);
+	A->st.build_seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+	*out = A;
+	return 0;
+}

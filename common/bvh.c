@@ -1,0 +1,182 @@
+/*
+ * bvh.c - binned SAH builder (16 bins on each axis over centroid bounds),
+ * children stored adjacently, bounds rounded outward to float.
+ */
+#include "common/bvh.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define BVH_BINS 16
+/* SAH constants relative to one primitive test */
+#define BVH_COST_TRAV 1.0
+#define BVH_COST_ISECT 1.0
+
+struct bvh_ctx {
+	const struct geom_box *boxes;
+	vec3 *cent;
+	uint32_t *perm;
+	struct bvh_node *nodes;
+	uint32_t n_nodes;
+	uint32_t max_leaf;
+};
+
+static float round_down(double x)
+{
+	float f = (float)x;
+	if ((double)f > x)
+		f = nextafterf(f, -INFINITY);
+	return f;
+}
+
+static float round_up(double x)
+{
+	float f = (float)x;
+	if ((double)f < x)
+		f = nextafterf(f, INFINITY);
+	return f;
+}
+
+static double box_area(struct geom_box b)
+{
+	vec3 e = v3_sub(b.hi, b.lo);
+	if (e.x < 0 || e.y < 0 || e.z < 0)
+		return 0;
+	return 2 * (e.x * e.y + e.y * e.z + e.z * e.x);
+}
+
+/* Partitions perm[begin, end) so that items with pred true come first. */
+static uint32_t partition(struct bvh_ctx *B, uint32_t begin, uint32_t end, int axis, double lo,
+			  double scale, int split_bin)
+{
+	uint32_t i = begin, j = end;
+	while (i < j) {
+		double c = v3_comp(B->cent[B->perm[i]], axis);
+		int k = (int)((c - lo) * scale);
+		k = k < 0 ? 0 : k >= BVH_BINS ? BVH_BINS - 1 : k;
+		if (k < split_bin) {
+			i++;
+		} else {
+			j--;
+			uint32_t t = B->perm[i];
+			B->perm[i] = B->perm[j];
+			B->perm[j] = t;
+		}
+	}
+	return i;
+}
+
+/* Builds node ni over perm[begin, end). Recursion depth < BVH_MAX_DEPTH. */
+static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t end, int depth)
+{
+	struct geom_box bb = geom_box_empty(), cb = geom_box_empty();
+	for (uint32_t i = begin; i < end; i++) {
+		bb = geom_box_union(bb, B->boxes[B->perm[i]]);
+		cb = geom_box_point(cb, B->cent[B->perm[i]]);
+	}
+	struct bvh_node *nd = &B->nodes[ni];
+	nd->b[0][0] = round_down(bb.lo.x), nd->b[0][1] = round_down(bb.lo.y), nd->b[0][2] = round_down(bb.lo.z);
+	nd->b[1][0] = round_up(bb.hi.x), nd->b[1][1] = round_up(bb.hi.y), nd->b[1][2] = round_up(bb.hi.z);
+	uint32_t n = end - begin;
+	if (n <= 1 || depth >= BVH_MAX_DEPTH - 1)
+		goto leaf;
+
+	double best = INFINITY;
+	int best_axis = -1, best_bin = 0;
+	for (int axis = 0; axis < 3; axis++) {
+		double lo = v3_comp(cb.lo, axis), ext = v3_comp(cb.hi, axis) - lo;
+		if (!(ext > 0))
+			continue;
+		double scale = BVH_BINS / ext;
+		struct geom_box bin_box[BVH_BINS];
+		uint32_t bin_n[BVH_BINS] = { 0 };
+		for (int k = 0; k < BVH_BINS; k++)
+			bin_box[k] = geom_box_empty();
+		for (uint32_t i = begin; i < end; i++) {
+			uint32_t it = B->perm[i];
+			int k = (int)((v3_comp(B->cent[it], axis) - lo) * scale);
+			k = k < 0 ? 0 : k >= BVH_BINS ? BVH_BINS - 1 : k;
+			bin_n[k]++;
+			bin_box[k] = geom_box_union(bin_box[k], B->boxes[it]);
+		}
+		double right_cost[BVH_BINS];
+		struct geom_box acc = geom_box_empty();
+		uint32_t cnt = 0;
+		for (int k = BVH_BINS - 1; k > 0; k--) {
+			acc = geom_box_union(acc, bin_box[k]);
+			cnt += bin_n[k];
+			right_cost[k] = box_area(acc) * cnt;
+		}
+		acc = geom_box_empty();
+		cnt = 0;
+		for (int k = 1; k < BVH_BINS; k++) { /* split before bin k */
+			acc = geom_box_union(acc, bin_box[k - 1]);
+			cnt += bin_n[k - 1];
+			if (cnt == 0 || cnt == n)
+				continue;
+			double c = box_area(acc) * cnt + right_cost[k];
+			if (c < best)
+				best = c, best_axis = axis, best_bin = k;
+		}
+	}
+	uint32_t mid;
+	if (best_axis < 0) { /* every centroid in one place */
+		if (n <= B->max_leaf)
+			goto leaf;
+		mid = begin + n / 2;
+	} else {
+		double area = box_area(bb);
+		double split_cost = BVH_COST_TRAV * area + BVH_COST_ISECT * best;
+		double leaf_cost = BVH_COST_ISECT * area * n;
+		if (n <= B->max_leaf && leaf_cost <= split_cost)
+			goto leaf;
+		double lo = v3_comp(cb.lo, best_axis), ext = v3_comp(cb.hi, best_axis) - lo;
+		mid = partition(B, begin, end, best_axis, lo, BVH_BINS / ext, best_bin);
+		if (mid == begin || mid == end)
+			mid = begin + n / 2;
+	}
+	uint32_t c = B->n_nodes;
+	B->n_nodes += 2;
+	nd->idx = c;
+	nd->n = 0;
+	build_node(B, c, begin, mid, depth + 1);
+	build_node(B, c + 1, mid, end, depth + 1);
+	return;
+leaf:
+	nd->idx = begin;
+	nd->n = n;
+}
+
+int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf)
+{
+	memset(b, 0, sizeof *b);
+	if (n == 0)
+		return 0;
+	struct bvh_ctx B = { boxes, NULL, perm, NULL, 1, max_leaf ? max_leaf : 1 };
+	B.cent = malloc((size_t)n * sizeof *B.cent);
+	B.nodes = malloc((size_t)2 * n * sizeof *B.nodes);
+	if (!B.cent || !B.nodes) {
+		free(B.cent);
+		free(B.nodes);
+		return -1;
+	}
+	for (uint32_t i = 0; i < n; i++) {
+		perm[i] = i;
+		B.cent[i] = v3_scale(v3_add(boxes[i].lo, boxes[i].hi), 0.5);
+	}
+	build_node(&B, 0, 0, n, 0);
+	free(B.cent);
+	struct bvh_node *shrunk = realloc(B.nodes, (size_t)B.n_nodes * sizeof *B.nodes);
+	b->nodes = shrunk ? shrunk : B.nodes;
+	b->n_nodes = B.n_nodes;
+	return 0;
+}
+
+void bvh_free(struct bvh *b)
+{
+	if (!b)
+		return;
+	free(b->nodes);
+	b->nodes = NULL;
+	b->n_nodes = 0;
+}

@@ -1,0 +1,170 @@
+/*
+ * geom.h - internal to the geometry modules (geom.c, bvh.c, csg.c, accel.c):
+ * per-object precomputed shape data and the object-space primitive kernels.
+ * Nothing outside common/geom*.c, bvh.c, csg.c and accel.c includes this.
+ *
+ * Every kernel works in the object's own space on an unnormalised ray
+ * o + t d: t is invariant under affine maps, so a hit distance found in
+ * object space is the caller's hit distance too.
+ */
+#ifndef PORTRAY_GEOM_H
+#define PORTRAY_GEOM_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "common/accel.h"
+
+/* Axis-aligned box; an empty box has lo > hi. Infinite components allowed. */
+struct geom_box {
+	vec3 lo, hi;
+};
+
+struct geom_box geom_box_empty(void);
+struct geom_box geom_box_union(struct geom_box a, struct geom_box b);
+struct geom_box geom_box_point(struct geom_box a, vec3 p);
+/* Box of the 8 corners of b mapped by m (infinite boxes stay infinite). */
+struct geom_box geom_box_xform(const mat34 *m, struct geom_box b);
+bool geom_box_finite(struct geom_box b);
+
+/* Polygon precomputation: the plane, a 2-D projection and the contours. */
+struct geom_poly {
+	vec3 p0, n;     /* a point on the plane (first vertex) and the unit Newell normal */
+	vec3 X, Y;      /* (u,v) axes: X = unit first edge, Y = n x X */
+	int ax0, ax1;   /* kept axes of the 2-D projection (the dominant one dropped) */
+	double *pts;    /* 2-D points, 2 per vertex (owned) */
+	uint32_t *cstart; /* n_contours + 1 offsets (owned) */
+	uint32_t n_contours, n_points;
+	double lo[2], hi[2]; /* 2-D bounds */
+};
+
+/* Per-object data in the object's own space (after its inverse transform). */
+struct geom_obj {
+	enum prim_kind kind;
+	uint32_t obj;      /* scene object index */
+	bool has_xform;
+	mat34 inv;         /* parent -> object (identity when !has_xform) */
+	mat34 fwd;         /* object -> parent */
+	union {
+		struct { vec3 c; double r; vec3 P, E, W; } sph;  /* pole, equator, P x E */
+		struct { vec3 pos, n, X, Y; double r; } pl;      /* plane and disk */
+		struct { vec3 from, a, X, Y; double h, r; bool capped; } cyl; /* a unit axis */
+		struct { vec3 lo, hi; } box;
+		struct { vec3 a, b, c, na, nb, nc; bool smooth; } tri;
+		struct geom_poly poly;
+	} u;
+};
+
+/*
+ * Fills g for scene object obj (any kind; CSG, RAW and instance get only the
+ * transform). Polygons allocate g->u.poly arrays: release with geom_obj_clear.
+ * Returns 0, or -1 when out of memory.
+ */
+int geom_obj_init(const struct scene *s, uint32_t obj, struct geom_obj *g);
+void geom_obj_clear(struct geom_obj *g);
+
+/* Bounds of the primitive in its own object space (PRIM_PLANE: infinite). */
+struct geom_box geom_obj_local_bounds(const struct scene *s, const struct geom_obj *g);
+
+/* The perpendicular axis pair used by planes, disks and cylinders when none is given. */
+void geom_frame(vec3 n, vec3 *x, vec3 *y);
+
+/* Parts, for the normal and (u,v) of a hit */
+enum { GEOM_PART_MAIN = 0, GEOM_PART_CAP0 = 1, GEOM_PART_CAP1 = 2 };
+
+/*
+ * Closest hit of a simple primitive (sphere, plane, disk, cylinder, box,
+ * triangle, polygon) with the object-space ray o + t d, tmin < t < tmax,
+ * with drawing semantics (open surfaces seen from both sides, an open
+ * cylinder's side only). Sets *t and *part.
+ */
+bool geom_intersect(const struct geom_obj *g, vec3 o, vec3 d, double tmin, double tmax, double *t,
+		    int *part);
+
+/* Unit outward (object-space) normal and (u,v) at object-space point p of part. */
+void geom_surface(const struct geom_obj *g, vec3 p, int part, vec3 *n, double *u, double *v);
+
+/* Triangle (u,v) mapping: lengths along unit(b-a) and along n x unit(b-a) from a. */
+void geom_tri_uv(vec3 a, vec3 b, vec3 c, vec3 p, double *u, double *v);
+
+/*
+ * Boundary crossings along the whole line o + t d, for CSG. A solid gives
+ * its entering and exiting t (flags GEOM_X_ENTER / GEOM_X_EXIT) and says in
+ * *inside0 whether t = -infinity is inside; a surface without inside (disk,
+ * triangle, polygon) gives GEOM_X_SURF crossings. GEOM_X_DRAW marks parts
+ * that are drawn (not the caps of an open cylinder). At most 2 crossings.
+ */
+enum { GEOM_X_ENTER = 1, GEOM_X_EXIT = 2, GEOM_X_SURF = 4, GEOM_X_DRAW = 8 };
+struct geom_cross1 {
+	double t;
+	int part;
+	int flags;
+};
+int geom_crossings(const struct geom_obj *g, vec3 o, vec3 d, struct geom_cross1 out[2], bool *inside0);
+
+/* ---- watertight ray/triangle (Woop, Benthin, Wald 2013) ---------------- */
+
+struct geom_wray {
+	double o[3];
+	int kx, ky, kz;
+	double sx, sy, sz;
+};
+
+void geom_wray_init(struct geom_wray *w, vec3 o, vec3 d);
+
+/*
+ * Watertight test: true with *t in (tmin, tmax) and barycentric weights
+ * *b1 (of b) and *b2 (of c) when the line crosses triangle abc. Seen from
+ * both sides; edges shared by two triangles are hit by exactly one of them
+ * or both, never neither.
+ */
+static inline bool geom_tri_hit(const struct geom_wray *w, vec3 a, vec3 b, vec3 c, double tmin,
+				double tmax, double *t, double *b1, double *b2)
+{
+	double A[3] = { a.x - w->o[0], a.y - w->o[1], a.z - w->o[2] };
+	double B[3] = { b.x - w->o[0], b.y - w->o[1], b.z - w->o[2] };
+	double C[3] = { c.x - w->o[0], c.y - w->o[1], c.z - w->o[2] };
+	double ax = A[w->kx] - w->sx * A[w->kz], ay = A[w->ky] - w->sy * A[w->kz];
+	double bx = B[w->kx] - w->sx * B[w->kz], by = B[w->ky] - w->sy * B[w->kz];
+	double cx = C[w->kx] - w->sx * C[w->kz], cy = C[w->ky] - w->sy * C[w->kz];
+	double U = cx * by - cy * bx;
+	double V = ax * cy - ay * cx;
+	double W = bx * ay - by * ax;
+	if ((U < 0 || V < 0 || W < 0) && (U > 0 || V > 0 || W > 0))
+		return false;
+	double det = U + V + W;
+	if (det == 0)
+		return false;
+	double T = U * (w->sz * A[w->kz]) + V * (w->sz * B[w->kz]) + W * (w->sz * C[w->kz]);
+	double tt = T / det;
+	if (!(tt > tmin && tt < tmax))
+		return false;
+	*t = tt;
+	*b1 = V / det;
+	*b2 = W / det;
+	return true;
+}
+
+/* ---- CSG (csg.c) --------------------------------------------------------- */
+
+/* Crossings kept on the stack per CSG ray before spilling to the heap. */
+#define CSG_STACK_CROSSINGS 64
+
+/*
+ * Closest drawn boundary of CSG object obj (kind PRIM_CSG) along o + t d,
+ * given in obj's PARENT space, with tmin < t < tmax. gobj[] must hold the
+ * geom_obj of obj and of every object below it (operands, instance members).
+ * On success fills h->t, n, ng (parent space, unit), u, v, mp, material
+ * (the operand surface's, else the nearest enclosing node's that has one,
+ * else SCENE_NONE) and object (the leaf); h->p is left to the caller.
+ * Surfaces with no inside and open cylinders follow docs/language.md.
+ * Thread-safe; allocates only when a ray has more than
+ * CSG_STACK_CROSSINGS crossings (and then treats out-of-memory as a miss).
+ */
+bool csg_hit(const struct scene *s, struct geom_obj *const *gobj, uint32_t obj, vec3 o, vec3 d,
+	     double tmin, double tmax, struct hit *h);
+
+/* Bounds of object obj in its parent space (CSG and instances recursively). */
+struct geom_box csg_bounds(const struct scene *s, struct geom_obj *const *gobj, uint32_t obj);
+
+#endif
