@@ -932,14 +932,15 @@ static int parse_object_body(struct parser *P, const struct token *open, uint32_
 			}
 			continue;
 		}
-		if (is_prim_kw(t->kw) || (t->kw == KW_NONE && t->num == NUM_NO && !have_prim)) {
+		if (is_prim_kw(t->kw) || (!have_prim && t->num == NUM_NO && !is_object_kw(t->kw) &&
+					  !is_transform_kw(t->kw))) {
 			if (have_prim) {
 				rc = err_near(P, t, "';' expected (to close 'object' at line %d)", open->line);
 				goto fail;
 			}
 			prim_tok = *t;
 			have_prim = true;
-			if (t->kw == KW_NONE)
+			if (!is_prim_kw(t->kw))
 				rc = parse_reference(P, &c, &xf, &has_xf, &depth, &mat, &mat_tok);
 			else
 				rc = parse_prim(P, &c, &xf, &has_xf, &depth);
@@ -1050,7 +1051,7 @@ static bool closer_in_shader(enum keyword kw)
 {
 	switch (kw) {
 	case KW_BRICKS: case KW_TILES: case KW_CHEQUERS: case KW_BUMPY: case KW_NOISE: case KW_FADES:
-	case KW_TURB3D: case KW_CALLED: case KW_NAMED: case KW_DIFF_COLOUR: case KW_SPEC_COLOUR:
+	case KW_TURB3D: case KW_CALLED: case KW_NAMED: case KW_COLOUR: case KW_DIFF_COLOUR: case KW_SPEC_COLOUR:
 	case KW_TRAN_COLOUR: case KW_DIFFUSE_REFLECTION: case KW_SPECULAR_REFLECTION:
 	case KW_SPECULAR_POWER: case KW_REFLECTION: case KW_TRANSPARENCY: case KW_REFRACTIVE_INDEX:
 		return true;

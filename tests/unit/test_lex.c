@@ -1,0 +1,174 @@
+/*
+ * test_lex.c - the lexer: token kinds, positions, comments, numbers,
+ * keywords in any case and their aliases, limits and errors.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/lex.h"
+#include "common/limits.h"
+#include "tests/unit/check.h"
+
+/* Lexes text and returns the n-th token (0-based). */
+static struct token nth(const char *text, int n)
+{
+	static struct lexer lx;
+	struct token t;
+	lex_init(&lx, text, strlen(text));
+	for (int i = 0; i <= n; i++)
+		lex_next(&lx, &t);
+	return t;
+}
+
+static int tok_is(const struct token *t, const char *s)
+{
+	return t->len == strlen(s) && memcmp(t->text, s, t->len) == 0;
+}
+
+static void test_kinds_positions(void)
+{
+	const char *src = "object\n  Sphere centre (1 -2.5 3e2) ;\n\t;";
+	struct lexer lx;
+	struct token t;
+	lex_init(&lx, src, strlen(src));
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_WORD && t.kw == KW_OBJECT && t.line == 1 && t.col == 1);
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_WORD && t.kw == KW_SPHERE && t.line == 2 && t.col == 3 && tok_is(&t, "Sphere"));
+	lex_next(&lx, &t);
+	CHECK(t.kw == KW_CENTRE && t.col == 10);
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_LPAREN && t.col == 17);
+	lex_next(&lx, &t);
+	CHECK(t.num == NUM_OK && t.value == 1 && t.col == 18);
+	lex_next(&lx, &t);
+	CHECK(t.num == NUM_OK && t.value == -2.5);
+	lex_next(&lx, &t);
+	CHECK(t.num == NUM_OK && t.value == 300 && t.kw == KW_NONE);
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_RPAREN && t.col == 28);
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_SEMI && t.line == 2 && t.col == 30);
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_SEMI && t.line == 3 && t.col == 2);
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_EOF && t.line == 3 && t.col == 3);
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_EOF);
+}
+
+static void test_comments(void)
+{
+	struct token t = nth("~ a comment\nover ~two~ lines ~ camera", 0);
+	CHECK(tok_is(&t, "two") && t.line == 2 && t.col == 7);
+	t = nth("~ a comment\nover ~two~ lines ~ camera", 1);
+	CHECK(t.kw == KW_CAMERA && t.line == 2 && t.col == 20);
+	t = nth("// all of this\n  light // and this ;\nimage", 1);
+	CHECK(t.kw == KW_IMAGE && t.line == 3 && t.col == 1);
+	t = nth("file ../x/y.inc//comment", 1);
+	CHECK(t.kind == TK_WORD && tok_is(&t, "../x/y.inc"));
+	t = nth("file ../x/y.inc//comment", 2);
+	CHECK(t.kind == TK_EOF);
+	t = nth("a~b~c", 1);
+	CHECK(tok_is(&t, "c"));
+	struct lexer lx;
+	const char *bad = "camera\n  ~ never closed\n";
+	lex_init(&lx, bad, strlen(bad));
+	lex_next(&lx, &t);
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_ERROR && t.line == 2 && t.col == 3 && strstr(lx.errmsg, "unfinished"));
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_ERROR); /* sticky */
+}
+
+static void test_numbers(void)
+{
+	double v = 0;
+	CHECK(lex_number("42", 2, &v) == NUM_OK && v == 42);
+	CHECK(lex_number("+4.5", 4, &v) == NUM_OK && v == 4.5);
+	CHECK(lex_number("-.5", 3, &v) == NUM_OK && v == -0.5);
+	CHECK(lex_number("5.", 2, &v) == NUM_OK && v == 5);
+	CHECK(lex_number("1.5E-3", 6, &v) == NUM_OK && v == 1.5e-3);
+	CHECK(lex_number("2e+2", 4, &v) == NUM_OK && v == 200);
+	CHECK(lex_number("1.2.3", 5, &v) == NUM_BAD);
+	CHECK(lex_number("1e", 2, &v) == NUM_BAD);
+	CHECK(lex_number("1e999", 5, &v) == NUM_BAD);
+	CHECK(lex_number("3abc", 4, &v) == NUM_BAD);
+	CHECK(lex_number("-", 1, &v) == NUM_NO);
+	CHECK(lex_number("-x", 2, &v) == NUM_NO);
+	CHECK(lex_number(".", 1, &v) == NUM_NO);
+	CHECK(lex_number("flat-red", 8, &v) == NUM_NO);
+	CHECK(lex_number("0x10", 4, &v) == NUM_BAD);
+	CHECK(lex_number("nan", 3, &v) == NUM_NO);
+	struct token t = nth("(1 2 3)", 3);
+	CHECK(t.num == NUM_OK && t.value == 3);
+	t = nth("radius 2;", 1);
+	CHECK(t.num == NUM_OK && t.value == 2 && t.len == 1);
+}
+
+static void test_keywords(void)
+{
+	CHECK(lex_keyword("OBJECT", 6) == KW_OBJECT);
+	CHECK(lex_keyword("Look-From", 9) == KW_LOOK_FROM);
+	CHECK(lex_keyword("color", 5) == KW_COLOUR);
+	CHECK(lex_keyword("Colour", 6) == KW_COLOUR);
+	CHECK(lex_keyword("center", 6) == KW_CENTRE);
+	CHECK(lex_keyword("VARIENCE", 8) == KW_VARIANCE);
+	CHECK(lex_keyword("diff-color", 10) == KW_DIFF_COLOUR);
+	CHECK(lex_keyword("flat-red", 8) == KW_NONE);
+	CHECK(lex_keyword("", 0) == KW_NONE);
+	/* every keyword finds itself, in upper case too */
+	for (int k = 1; k < KW_COUNT; k++) {
+		const char *n = lex_keyword_name((enum keyword)k);
+		char up[64];
+		size_t len = strlen(n);
+		CHECK(len < sizeof up);
+		for (size_t i = 0; i <= len; i++)
+			up[i] = (n[i] >= 'a' && n[i] <= 'z') ? (char)(n[i] - 32) : n[i];
+		CHECK(lex_keyword(n, len) == (enum keyword)k);
+		CHECK(lex_keyword(up, len) == (enum keyword)k);
+	}
+	CHECK(strcmp(lex_keyword_name(KW_NONE), "?") == 0);
+}
+
+static void test_limits_and_errors(void)
+{
+	size_t n = LIM_TOKEN_LEN + 1;
+	char *big = malloc(n + 8);
+	memset(big, 'x', n);
+	big[n] = '\0';
+	struct lexer lx;
+	struct token t;
+	lex_init(&lx, big, n);
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_ERROR && strstr(lx.errmsg, "too long"));
+	lex_init(&lx, big, LIM_TOKEN_LEN);
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_WORD && t.len == LIM_TOKEN_LEN);
+	free(big);
+	const char ctl[] = "light \x01";
+	lex_init(&lx, ctl, sizeof ctl - 1);
+	lex_next(&lx, &t);
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_ERROR && t.col == 7);
+	/* not NUL-terminated: the lexer stops at len */
+	const char part[] = "cameraXYZ";
+	lex_init(&lx, part, 6);
+	lex_next(&lx, &t);
+	CHECK(t.kw == KW_CAMERA && t.len == 6);
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_EOF);
+	/* UTF-8 in names is fine */
+	t = nth("named caf\xc3\xa9", 1);
+	CHECK(t.kind == TK_WORD && t.len == 5);
+}
+
+int main(void)
+{
+	test_kinds_positions();
+	test_comments();
+	test_numbers();
+	test_keywords();
+	test_limits_and_errors();
+	TEST_MAIN_END();
+}
