@@ -15,14 +15,6 @@
 /* A ray whose contribution to the pixel would be below this is not traced:
  * 1/512 is a quarter of one 8-bit step at full brightness. */
 #define SHADE_MIN_WEIGHT (1.0 / 512.0)
-/*
- * Secondary rays start this far (relative to the size of the hit point's
- * coordinates) off the surface, on the side they leave to, so they cannot
- * hit the surface they start on (no acne). The geometry computes hits in
- * double precision, whose error is ~1e-15 relative; 1e-9 leaves a wide
- * margin and is far below anything visible.
- */
-#define SHADE_EPS_REL 1e-9
 /* Stream tags for rng_derive: one purpose each. */
 #define TAG_LIGHT 0x4c49474854000000ull /* + light index */
 #define TAG_REFLECT 0x5245464cull
@@ -107,12 +99,12 @@ static double maxc(vec3 a) { return fmax(a.x, fmax(a.y, a.z)); }
 
 static double frac(double x) { return x - floor(x); }
 
-/* p moved off the surface with geometric normal ng to the side dir points to. */
-static vec3 offset(vec3 p, vec3 ng, vec3 dir)
-{
-	double eps = SHADE_EPS_REL * (1 + fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z))));
-	return v3_add(p, v3_scale(ng, v3_dot(ng, dir) >= 0 ? eps : -eps));
-}
+/*
+ * p moved off the surface with geometric normal ng to the side dir points
+ * to, so a secondary ray from there (tmin = 0) cannot hit the surface it
+ * starts on (no acne): the geometry's accel_offset_point.
+ */
+static vec3 offset(vec3 p, vec3 ng, vec3 dir) { return accel_offset_point(p, ng, dir); }
 
 /*
  * Sample k of n on a light: a point light's position, or a point on the

@@ -1,9 +1,9 @@
 /*
  * test_shade.c - the lighting equation, term by term, on hand-made geometry.
  *
- * This test supplies its own accel_intersect/accel_occluded over a few
- * analytic spheres and planes (so the linker never pulls in the real
- * accel), records every ray the shader casts, and checks the colours and
+ * This test supplies its own accel_intersect, accel_occluded and
+ * accel_offset_point over a few analytic spheres and planes (so the linker
+ * never pulls in the real accel), records every ray the shader casts, and checks the colours and
  * the rays against values computed by hand from docs/rendering.md.
  */
 #include <math.h>
@@ -102,6 +102,13 @@ bool accel_occluded(const struct accel *a, const struct ray *r)
 		if (prim_hit(&a->p[i], r, &h))
 			return true;
 	return false;
+}
+
+/* The same offset as the real accel's (accel.h). */
+vec3 accel_offset_point(vec3 p, vec3 ng, vec3 dir)
+{
+	double eps = 1e-9 * (1 + fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z))));
+	return v3_add(p, v3_scale(ng, v3_dot(ng, dir) >= 0 ? eps : -eps));
 }
 
 /* ---- helpers ----------------------------------------------------------------- */
