@@ -1,0 +1,12 @@
+// metamorphic: samechq_b
+camera
+    look-from (0 2.5 7)
+    look-at (0 0.3 0)
+    drop-line (0 -1 0)
+    filter standard ;
+;
+image xsize 64 ysize 48 ;
+light colour (1 1 1) position (-4 6 5) ;
+object sphere centre (0 0 0) radius 1 ;
+    material colour (1 0.2 0.2) ;
+;

@@ -1,0 +1,13 @@
+// golden: shader_bricks
+camera
+    look-from (0 2.5 7)
+    look-at (0 0.3 0)
+    drop-line (0 -1 0)
+    filter standard ;
+;
+image xsize 64 ysize 48 ;
+light colour (1 1 1) position (-4 6 5) ;
+object box a (-3 -1 -1) b (3 3 0) ;
+    material bricks size 0.8 ; ;
+;
+object plane position (0 -1 0) normal (0 1 0) ; material colour (0.5 0.5 0.5) ; ;

@@ -1,0 +1,21 @@
+// golden: shader_chequers
+camera
+    look-from (0 2.5 7)
+    look-at (0 0.3 0)
+    drop-line (0 -1 0)
+    filter standard ;
+;
+image xsize 64 ysize 48 ;
+light colour (1 1 1) position (-4 6 5) ;
+object sphere radius 1.2 ;
+    material chequers size 0.6
+        material-a material colour (1 0 0) ;
+        material-b material colour (1 1 1) ;
+    ; ;
+;
+object plane position (0 -1 0) normal (0 1 0) ;
+    material chequers size 1
+        material-a material colour (0.9 0.9 0.9) ;
+        material-b material colour (0.35 0.35 0.4) ;
+    ; ;
+;

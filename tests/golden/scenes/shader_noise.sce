@@ -1,0 +1,18 @@
+// golden: shader_noise
+camera
+    look-from (0 2.5 7)
+    look-at (0 0.3 0)
+    drop-line (0 -1 0)
+    filter standard ;
+;
+image xsize 64 ysize 48 ;
+light colour (1 1 1) position (-4 6 5) ;
+object plane position (0 -1 0) normal (0 1 0) ;
+    material chequers size 1
+        material-a material colour (0.9 0.9 0.9) ;
+        material-b material colour (0.35 0.35 0.4) ;
+    ; ;
+;
+object sphere centre (0 0.2 0) radius 1.2 ;
+    material colour (1 0.8 0.6) noise size 0.3 colour (0.6 0.6 0.6) varience 0.5 ; ;
+;
