@@ -1,0 +1,55 @@
+#!/bin/sh
+# check_cli.sh - `portray-master --check` on the command line: the summary's
+# lines, a camera file (-c), errors on stderr with the Appendix B exit code,
+# a missing scene file.
+M=$(pwd)/bin/portray-master
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+
+cat >"$T/s.sce" <<'SCE'
+define object name pair object sphere ; ; object box ; ; ; ;
+define material named red colour (1 0 0) ; ;
+camera filter standard filter super-sample x-samples 3 ; ;
+light shape sphere radius 1 ; samples 4 ;
+object pair ; translate (1 0 0) ;
+object pair ; material called red ; ;
+object triangle ; ;
+object csg operand1 object sphere ; ; operand2 object disk ; ; union ; material colour (0 1 0) ; ;
+SCE
+cat >"$T/c.cam" <<'CAM'
+image xsize 64 ysize 48 ;
+light ;
+CAM
+out=$("$M" --check -c "$T/c.cam" "$T/s.sce" 2>"$T/err") || fail "exit $?: $(cat "$T/err")"
+echo "$out"
+echo "$out" | grep -qx 'image: 64x48' || fail "image line"
+echo "$out" | grep -qx 'filters: standard, super-sample (3 x 2)' || fail "filters line"
+echo "$out" | grep -qx 'lights: 2 (1 point, 1 shaped)' || fail "lights line"
+echo "$out" | grep -qx 'objects: 8 (2 sphere, 1 box, 1 triangle, 1 csg, 1 disk, 2 instance)' || fail "objects line"
+echo "$out" | grep -qx 'definitions: 1' || fail "definitions line"
+echo "$out" | grep -qx 'instances: 2' || fail "instances line"
+echo "$out" | grep -qx 'materials: 2 (1 named, 1 inline)' || fail "materials line"
+echo "$out" | grep -qx 'triangles: 1 (1 drawn through instances)' || fail "triangles line"
+[ -s "$T/err" ] && fail "unexpected stderr: $(cat "$T/err")"
+
+# errors: stderr only, exit code = level
+printf 'light samples 3 ;\n' >"$T/l2.sce"
+"$M" --check "$T/l2.sce" >"$T/out" 2>"$T/err"
+rc=$?
+[ "$rc" = 2 ] || fail "level 2 error gave exit $rc"
+[ -s "$T/out" ] && fail "stdout on error: $(cat "$T/out")"
+grep -q "l2.sce:1:7: error: 'samples' on a light with no shape" "$T/err" || fail "level 2 message: $(cat "$T/err")"
+
+"$M" --check "$T/none.sce" >"$T/out" 2>"$T/err"
+rc=$?
+[ "$rc" = 1 ] || fail "missing scene gave exit $rc"
+grep -q "none.sce: error: unable to open scene file: No such file" "$T/err" || fail "missing scene message: $(cat "$T/err")"
+
+# a filter before standard: a warning, not an error
+printf 'camera filter lens ; filter standard ;\n' >"$T/w.sce"
+"$M" --check "$T/w.sce" >"$T/out" 2>"$T/err" || fail "warning case failed"
+grep -q "w.sce:1:8: warning: filter lens before the first standard or adaptive filter is ignored" "$T/err" ||
+	fail "warning text: $(cat "$T/err")"
+grep -qx 'filters: standard' "$T/out" || fail "filters after the warning"
+echo ok

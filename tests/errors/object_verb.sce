@@ -1,0 +1,4 @@
+// expect: 1 object_verb.sce:3:12: error: unknown verb in object (sphere) near 'diameter'
+object
+    sphere diameter 2 ;
+;

@@ -1,0 +1,5 @@
+// expect: 1 object_verb2.sce:4:5: error: unknown verb in object near 'glow'
+object
+    sphere ;
+    glow
+;
