@@ -1,0 +1,48 @@
+#!/bin/sh
+# render_keys.sh - on a terminal (a pty from script(1)), q and Esc end a render
+# early and write the finished part (exit 0), the terminal gets its canonical
+# mode and echo back; with image `nonstop` keys are ignored.
+. tests/cli/render_lib.inc
+if ! command -v script >/dev/null 2>&1; then
+	echo "script(1) not installed: skipped"
+	exit 0
+fi
+slow_scene() { # FILE SIDE [nonstop]
+	cat >"$1" <<SCE
+camera look-from (0 5 0.01) look-at (0 0 0) drop-line (0 0 1) depth 1 x-size 1 y-size 1
+  filter standard ; filter super-sample x-samples 8 y-samples 8 ; ;
+image xsize $2 ysize $2 $3 ;
+light position (0 4 0) shape sphere centre (0 4 0) radius 0.5 ; samples 4 ;
+object plane position (0 -1 0) normal (0 1 0) ; ;
+SCE
+}
+# on_tty KEYS DELAY LOG COMMAND: runs COMMAND on a pty, typing KEYS after DELAY s
+on_tty() {
+	(sleep "$2"; printf "$1"; sleep 1) | script -qec "$4" /dev/null >"$3" 2>&1
+}
+
+slow_scene "$TMP/slow.sce" 400
+for key in q '\033'; do
+	rm -f "$TMP/k.ppm"
+	on_tty "$key" 1 "$TMP/log" "'$MASTER' '$TMP/slow.sce' -o '$TMP/k.ppm' -j 1 --tile 20; echo rc=\$?; stty -a"
+	tr -d '\r' <"$TMP/log" >"$TMP/log2"
+	grep -Eq 'stopped: [0-9]+ of 400 tiles \([0-9]+%\) written to' "$TMP/log2" ||
+		fail "key '$key': no 'stopped' message: $(tail -c 300 "$TMP/log2")"
+	grep -q '^rc=0$' "$TMP/log2" || fail "key '$key': exit status not 0"
+	ppm_check "$TMP/k.ppm" 400 400
+	[ "$(ppm_pixel "$TMP/k.ppm" 400 399 399)" = "0 0 0" ] || fail "key '$key': unfinished pixel not black"
+	# terminal restored: canonical mode and echo
+	grep -q -- '-icanon' "$TMP/log2" && fail "key '$key': terminal left non-canonical"
+	grep -Eq '(^| )icanon' "$TMP/log2" || fail "key '$key': no stty output"
+	grep -Eq '(^| )-echo( |$)' "$TMP/log2" && fail "key '$key': echo left off"
+done
+
+# nonstop: q is ignored, the render completes
+slow_scene "$TMP/ns.sce" 200 nonstop
+on_tty q 0.3 "$TMP/log" "'$MASTER' '$TMP/ns.sce' -o '$TMP/ns.ppm' -j 1 --tile 20; echo rc=\$?"
+tr -d '\r' <"$TMP/log" >"$TMP/log2"
+grep -q 'stopped' "$TMP/log2" && fail "nonstop: a key stopped the render"
+grep -q '^rc=0$' "$TMP/log2" || fail "nonstop: exit status not 0: $(tail -c 300 "$TMP/log2")"
+ppm_check "$TMP/ns.ppm" 200 200
+[ "$(ppm_pixel "$TMP/ns.ppm" 200 199 199)" != "0 0 0" ] || fail "nonstop: image not complete"
+echo "render_keys: ok"
