@@ -1,0 +1,839 @@
+/*
+ * img.c - image files: PNG (RGB8, with an in-tree deflate) and binary PPM.
+ *
+ * PNG encoder:
+ *   - Filters: each row takes the filter (None, Sub, Up, Average, Paeth) whose
+ *     output has the smallest sum of absolute values (bytes read as signed),
+ *     the heuristic the PNG specification recommends for true-colour images.
+ *   - Deflate (RFC 1951): LZ77 over a 32 KiB window with hash chains on three
+ *     bytes and one-step lazy matching (parameters close to zlib's level 6:
+ *     chains of up to 128, 32 when a good match is in hand, stop at 128).
+ *     Symbols are gathered into blocks of up to 16 Ki symbols; each block is
+ *     written as dynamic Huffman, fixed Huffman or stored, whichever is
+ *     smallest. Huffman code lengths are limited (15, and 7 for the code-length
+ *     code) by halving the frequencies until the tree fits; every code has at
+ *     least two symbols, so all codes are complete.
+ *   - zlib wrapper (RFC 1950) with Adler-32; chunks with CRC-32; the IDAT
+ *     data is split into chunks of at most 1 MiB.
+ * img_write picks the format by the name: ".png" in any case gives PNG and
+ * every other name (".ppm", or anything else) binary PPM (P6, maxval 255).
+ */
+#include "common/img.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "common/limits.h"
+
+/* ---- tables ---------------------------------------------------------------- */
+
+static uint32_t crc_table[256];
+static uint8_t len_code[259];   /* match length 3..258 -> code index 0..28 */
+static uint8_t dist_code[512];  /* see img_dist_code */
+static pthread_once_t tables_once = PTHREAD_ONCE_INIT;
+
+/* base values and extra bits of the 29 length codes and 30 distance codes */
+static const uint16_t len_base[29] = { 3,  4,  5,  6,  7,  8,  9,  10, 11,  13,  15,  17,  19,  23, 27,
+				       31, 35, 43, 51, 59, 67, 83, 99, 115, 131, 163, 195, 227, 258 };
+static const uint8_t len_extra[29] = { 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2,
+				       2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0 };
+static const uint16_t dist_base[30] = { 1,   2,   3,   4,   5,    7,    9,    13,   17,   25,
+					33,  49,  65,  97,  129,  193,  257,  385,  513,  769,
+					1025, 1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577 };
+static const uint8_t dist_extra[30] = { 0, 0, 0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6,
+					6, 7, 7, 8, 8, 9, 9, 10, 10, 11, 11, 12, 12, 13, 13 };
+/* order in which code-length code lengths are sent */
+static const uint8_t cl_order[19] = { 16, 17, 18, 0, 8, 7, 9, 6, 10, 5, 11, 4, 12, 3, 13, 2, 14, 1, 15 };
+
+static void tables_init(void)
+{
+	for (uint32_t n = 0; n < 256; n++) {
+		uint32_t c = n;
+		for (int k = 0; k < 8; k++)
+			c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+		crc_table[n] = c;
+	}
+	for (int code = 0; code < 29; code++) {
+		int top = code == 28 ? 258 : len_base[code] + (1 << len_extra[code]) - 1;
+		if (code == 27)
+			top = 257; /* 258 has its own code */
+		for (int l = len_base[code]; l <= top; l++)
+			len_code[l] = (uint8_t)code;
+	}
+	/* distances 1..256 directly; 257..32768 by (d-1) >> 7 */
+	for (int code = 0; code < 30; code++) {
+		int lo = dist_base[code], hi = dist_base[code] + (1 << dist_extra[code]) - 1;
+		for (int d = lo; d <= hi; d++) {
+			if (d <= 256)
+				dist_code[d - 1] = (uint8_t)code;
+			else
+				dist_code[256 + ((d - 1) >> 7)] = (uint8_t)code;
+		}
+	}
+}
+
+static inline int img_dist_code(unsigned d)
+{
+	return d <= 256 ? dist_code[d - 1] : dist_code[256 + ((d - 1) >> 7)];
+}
+
+/*
+ * CRC-32 as in PNG and zlib (reflected polynomial 0xEDB88320). Start with
+ * crc = 0; feeding a message in pieces chains: crc32(crc32(0, a), b) is the
+ * CRC of a followed by b. "123456789" gives 0xCBF43926.
+ */
+uint32_t img_crc32(uint32_t crc, const uint8_t *p, size_t n)
+{
+	pthread_once(&tables_once, tables_init);
+	crc = ~crc;
+	for (size_t i = 0; i < n; i++)
+		crc = crc_table[(crc ^ p[i]) & 0xff] ^ (crc >> 8);
+	return ~crc;
+}
+
+/* Adler-32 (RFC 1950). Start with adler = 1; chains like img_crc32. */
+uint32_t img_adler32(uint32_t adler, const uint8_t *p, size_t n)
+{
+	uint32_t a = adler & 0xffff, b = adler >> 16;
+	while (n > 0) {
+		/* 5552 bytes keep b below 2^32 before the reduction (zlib's NMAX) */
+		size_t k = n < 5552 ? n : 5552;
+		n -= k;
+		while (k--) {
+			a += *p++;
+			b += a;
+		}
+		a %= 65521;
+		b %= 65521;
+	}
+	return (b << 16) | a;
+}
+
+/* ---- output buffer and bit writer ------------------------------------------- */
+
+struct obuf {
+	uint8_t *p;
+	size_t n, cap;
+	int oom;
+	uint64_t bits; /* pending bits, LSB first */
+	int nbits;
+};
+
+static void ob_reserve(struct obuf *o, size_t more)
+{
+	if (o->oom || o->n + more <= o->cap)
+		return;
+	size_t ncap = o->cap ? o->cap : 4096;
+	while (ncap < o->n + more) {
+		if (ncap > SIZE_MAX / 2) {
+			o->oom = 1;
+			return;
+		}
+		ncap *= 2;
+	}
+	uint8_t *np = realloc(o->p, ncap);
+	if (!np) {
+		o->oom = 1;
+		return;
+	}
+	o->p = np;
+	o->cap = ncap;
+}
+
+static void ob_bytes(struct obuf *o, const void *src, size_t n)
+{
+	ob_reserve(o, n);
+	if (o->oom)
+		return;
+	memcpy(o->p + o->n, src, n);
+	o->n += n;
+}
+
+static void ob_be32(struct obuf *o, uint32_t v)
+{
+	uint8_t b[4] = { (uint8_t)(v >> 24), (uint8_t)(v >> 16), (uint8_t)(v >> 8), (uint8_t)v };
+	ob_bytes(o, b, 4);
+}
+
+/* Appends n (<= 32) bits of v, least significant first. */
+static inline void ob_put(struct obuf *o, uint32_t v, int n)
+{
+	o->bits |= (uint64_t)v << o->nbits;
+	o->nbits += n;
+	if (o->nbits >= 32) {
+		ob_reserve(o, 4);
+		if (!o->oom) {
+			uint8_t *d = o->p + o->n;
+			d[0] = (uint8_t)o->bits;
+			d[1] = (uint8_t)(o->bits >> 8);
+			d[2] = (uint8_t)(o->bits >> 16);
+			d[3] = (uint8_t)(o->bits >> 24);
+			o->n += 4;
+		}
+		o->bits >>= 32;
+		o->nbits -= 32;
+	}
+}
+
+/* Pads to a byte boundary and writes out the pending bits. */
+static void ob_flush_bits(struct obuf *o)
+{
+	while (o->nbits > 0) {
+		uint8_t b = (uint8_t)o->bits;
+		ob_bytes(o, &b, 1);
+		o->bits >>= 8;
+		o->nbits -= 8;
+	}
+	o->bits = 0;
+	o->nbits = 0;
+}
+
+/* ---- Huffman codes ------------------------------------------------------------ */
+
+/*
+ * Code lengths for freq[0..n) limited to `limit` bits. Symbols with zero
+ * frequency get length 0. At least two symbols always get a code (a zero
+ * frequency symbol is promoted when needed), so the code is complete.
+ */
+static void huff_lengths(const uint32_t *freq_in, int n, int limit, uint8_t *len)
+{
+	uint32_t freq[288];
+	int nz = 0;
+	for (int i = 0; i < n; i++) {
+		freq[i] = freq_in[i];
+		nz += freq[i] != 0;
+	}
+	for (int i = 0; nz < 2 && i < n; i++) {
+		if (!freq[i]) {
+			freq[i] = 1;
+			nz++;
+		}
+	}
+	for (;;) {
+		/* leaves sorted by frequency (insertion sort: n <= 288) */
+		int sym[288], m = 0;
+		for (int i = 0; i < n; i++) {
+			if (!freq[i])
+				continue;
+			int j = m++;
+			while (j > 0 && freq[sym[j - 1]] > freq[i]) {
+				sym[j] = sym[j - 1];
+				j--;
+			}
+			sym[j] = i;
+		}
+		/* two-queue Huffman: nodes 0..m-1 leaves, m.. internal */
+		uint64_t w[2 * 288];
+		int parent[2 * 288];
+		for (int i = 0; i < m; i++)
+			w[i] = freq[sym[i]];
+		int li = 0, ii = m, next = m;
+		for (int k = 0; k < m - 1; k++) {
+			int pick[2];
+			for (int t = 0; t < 2; t++) {
+				if (li < m && (ii >= next || w[li] <= w[ii]))
+					pick[t] = li++;
+				else
+					pick[t] = ii++;
+			}
+			w[next] = w[pick[0]] + w[pick[1]];
+			parent[pick[0]] = parent[pick[1]] = next;
+			next++;
+		}
+		/* depths: the root is next-1; parents have larger indices */
+		int depth[2 * 288];
+		depth[next - 1] = 0;
+		for (int i = next - 2; i >= 0; i--)
+			depth[i] = depth[parent[i]] + 1;
+		int maxd = 0;
+		for (int i = 0; i < m; i++)
+			maxd = depth[i] > maxd ? depth[i] : maxd;
+		if (maxd <= limit) {
+			memset(len, 0, (size_t)n);
+			for (int i = 0; i < m; i++)
+				len[sym[i]] = (uint8_t)depth[i];
+			return;
+		}
+		for (int i = 0; i < n; i++)
+			if (freq[i])
+				freq[i] = (freq[i] >> 1) | 1;
+	}
+}
+
+/* Canonical codes from lengths (RFC 1951 3.2.2), bit-reversed for LSB-first output. */
+static void huff_codes(const uint8_t *len, int n, uint16_t *code)
+{
+	int count[16] = { 0 }, next[16];
+	for (int i = 0; i < n; i++)
+		count[len[i]]++;
+	count[0] = 0;
+	int c = 0;
+	for (int b = 1; b < 16; b++) {
+		c = (c + count[b - 1]) << 1;
+		next[b] = c;
+	}
+	for (int i = 0; i < n; i++) {
+		if (!len[i]) {
+			code[i] = 0;
+			continue;
+		}
+		unsigned v = (unsigned)next[len[i]]++, r = 0;
+		for (int k = 0; k < len[i]; k++) {
+			r = (r << 1) | (v & 1);
+			v >>= 1;
+		}
+		code[i] = (uint16_t)r;
+	}
+}
+
+/* ---- deflate ------------------------------------------------------------------- */
+
+#define WSIZE 32768
+#define HBITS 15
+#define HSIZE (1 << HBITS)
+#define MIN_MATCH 3
+#define MAX_MATCH 258
+#define MAX_CHAIN 128  /* zlib level 6 */
+#define GOOD_LEN 8     /* with a match this long, search a quarter of the chain */
+#define NICE_LEN 128   /* stop searching at a match this long */
+#define LAZY_LEN 16    /* do not look for a better match beyond this */
+#define BLOCK_SYMS 16384
+
+struct deflate {
+	const uint8_t *in;
+	size_t n;
+	uint32_t *head; /* HSIZE: most recent position + 1 with this hash (0: none) */
+	uint32_t *prev; /* WSIZE: previous position + 1 in the chain */
+	uint16_t *sym_ll; /* literal (0-255) or length (3-258) */
+	uint16_t *sym_d;  /* 0 for a literal, else the distance */
+	int nsym;
+	size_t block_start; /* first input byte of the pending block */
+	struct obuf *o;
+};
+
+static inline uint32_t hash3(const uint8_t *p)
+{
+	uint32_t v = (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16;
+	return (v * 2654435761u) >> (32 - HBITS);
+}
+
+static inline void insert(struct deflate *z, size_t pos)
+{
+	if (pos + MIN_MATCH > z->n)
+		return;
+	uint32_t h = hash3(z->in + pos);
+	z->prev[pos & (WSIZE - 1)] = z->head[h];
+	z->head[h] = (uint32_t)pos + 1;
+}
+
+/* Word-at-a-time match comparison where the byte order makes it easy. */
+#if defined(__GNUC__) && defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#define IMG_WORD_COMPARE 1
+#else
+#define IMG_WORD_COMPARE 0
+#endif
+
+/* Longest match for pos among earlier positions (inserted already); 0 if < 3. */
+static int longest_match(const struct deflate *z, size_t pos, int prev_len, unsigned *dist)
+{
+	size_t avail = z->n - pos;
+	int maxlen = avail < MAX_MATCH ? (int)avail : MAX_MATCH;
+	if (maxlen < MIN_MATCH)
+		return 0;
+	int chain = prev_len >= GOOD_LEN ? MAX_CHAIN / 4 : MAX_CHAIN;
+	int best = prev_len > MIN_MATCH - 1 ? prev_len : MIN_MATCH - 1;
+	int found = 0;
+	if (best >= maxlen)
+		return 0;
+	const uint8_t *s = z->in + pos;
+	uint32_t cand = z->head[hash3(s)];
+	while (cand && chain-- > 0) {
+		size_t c = cand - 1;
+		if (c >= pos || pos - c > WSIZE)
+			break;
+		const uint8_t *t = z->in + c;
+		if (t[best] == s[best] && t[0] == s[0] && t[1] == s[1]) {
+			int l = 2;
+#if IMG_WORD_COMPARE
+			while (l + 8 <= maxlen) {
+				uint64_t a, b;
+				memcpy(&a, t + l, 8);
+				memcpy(&b, s + l, 8);
+				if (a != b)
+					break;
+				l += 8;
+			}
+#endif
+			while (l < maxlen && t[l] == s[l])
+				l++;
+			if (l > best) {
+				best = l;
+				found = l;
+				*dist = (unsigned)(pos - c);
+				if (l >= NICE_LEN || l >= maxlen)
+					break;
+			}
+		}
+		uint32_t nx = z->prev[c & (WSIZE - 1)];
+		if (nx >= cand) /* the window wrapped past this chain */
+			break;
+		cand = nx;
+	}
+	return found >= MIN_MATCH ? found : 0;
+}
+
+/* Bits to send freq under lengths len, with the extra bits of lengths/distances. */
+static uint64_t block_cost(const uint32_t *lf, const uint8_t *ll, const uint32_t *df, const uint8_t *dl)
+{
+	uint64_t bits = 0;
+	for (int i = 0; i < 286; i++)
+		bits += (uint64_t)lf[i] * (ll[i] + (i >= 257 ? len_extra[i - 257] : 0));
+	for (int i = 0; i < 30; i++)
+		bits += (uint64_t)df[i] * (dl[i] + dist_extra[i]);
+	return bits;
+}
+
+/* Writes the symbols of one block with the given codes. */
+static void write_symbols(struct deflate *z, const uint16_t *lc, const uint8_t *ll, const uint16_t *dc,
+			  const uint8_t *dl)
+{
+	struct obuf *o = z->o;
+	for (int i = 0; i < z->nsym; i++) {
+		unsigned v = z->sym_ll[i], d = z->sym_d[i];
+		if (!d) {
+			ob_put(o, lc[v], ll[v]);
+			continue;
+		}
+		int c = len_code[v];
+		ob_put(o, lc[257 + c], ll[257 + c]);
+		if (len_extra[c])
+			ob_put(o, v - len_base[c], len_extra[c]);
+		int dcode = img_dist_code(d);
+		ob_put(o, dc[dcode], dl[dcode]);
+		if (dist_extra[dcode])
+			ob_put(o, d - dist_base[dcode], dist_extra[dcode]);
+	}
+	ob_put(o, lc[256], ll[256]);
+}
+
+/*
+ * Emits the pending symbols, which cover input [block_start, end), as the
+ * smallest of a dynamic, fixed or stored block. last marks the final block.
+ */
+static void flush_block(struct deflate *z, size_t end, int last)
+{
+	struct obuf *o = z->o;
+	uint32_t lf[286] = { 0 }, df[30] = { 0 };
+	for (int i = 0; i < z->nsym; i++) {
+		if (!z->sym_d[i]) {
+			lf[z->sym_ll[i]]++;
+		} else {
+			lf[257 + len_code[z->sym_ll[i]]]++;
+			df[img_dist_code(z->sym_d[i])]++;
+		}
+	}
+	lf[256] = 1;
+
+	/* dynamic code */
+	uint8_t ll[286], dl[30];
+	huff_lengths(lf, 286, 15, ll);
+	huff_lengths(df, 30, 15, dl);
+	int hlit = 286, hdist = 30;
+	while (hlit > 257 && !ll[hlit - 1])
+		hlit--;
+	while (hdist > 1 && !dl[hdist - 1])
+		hdist--;
+	/* run-length code the lengths with symbols 16 (repeat), 17, 18 (zeros) */
+	uint8_t lens[316], rle[316], rle_extra[316];
+	int nl = 0, nr = 0;
+	for (int i = 0; i < hlit; i++)
+		lens[nl++] = ll[i];
+	for (int i = 0; i < hdist; i++)
+		lens[nl++] = dl[i];
+	uint32_t cf[19] = { 0 };
+	for (int i = 0; i < nl;) {
+		int v = lens[i], run = 1;
+		while (i + run < nl && lens[i + run] == v)
+			run++;
+		if (v == 0 && run >= 3) {
+			int r = run > 138 ? 138 : run;
+			rle[nr] = r >= 11 ? 18 : 17;
+			rle_extra[nr++] = (uint8_t)(r >= 11 ? r - 11 : r - 3);
+			i += r;
+		} else if (v != 0 && run >= 4) {
+			rle[nr] = (uint8_t)v;
+			rle_extra[nr++] = 0;
+			int r = run - 1 > 6 ? 6 : run - 1;
+			rle[nr] = 16;
+			rle_extra[nr++] = (uint8_t)(r - 3);
+			i += 1 + r;
+		} else {
+			rle[nr] = (uint8_t)v;
+			rle_extra[nr++] = 0;
+			i++;
+		}
+	}
+	for (int i = 0; i < nr; i++)
+		cf[rle[i]]++;
+	uint8_t cl[19];
+	huff_lengths(cf, 19, 7, cl);
+	int hclen = 19;
+	while (hclen > 4 && !cl[cl_order[hclen - 1]])
+		hclen--;
+	uint64_t dyn = 3 + 5 + 5 + 4 + 3ull * hclen + block_cost(lf, ll, df, dl);
+	for (int i = 0; i < 19; i++)
+		dyn += (uint64_t)cf[i] * (cl[i] + (i == 16 ? 2 : i == 17 ? 3 : i == 18 ? 7 : 0));
+
+	/* fixed code */
+	uint8_t fl[288], fd[30];
+	for (int i = 0; i < 288; i++)
+		fl[i] = i < 144 ? 8 : i < 256 ? 9 : i < 280 ? 7 : 8;
+	memset(fd, 5, sizeof fd);
+	uint64_t fix = 3 + block_cost(lf, fl, df, fd);
+
+	/* stored: per 65535-byte piece a 3-bit header, padding, LEN and NLEN */
+	size_t raw = end - z->block_start;
+	uint64_t pieces = raw ? (raw + 65534) / 65535 : 1;
+	uint64_t stored = pieces * (3 + 7 + 32) + 8ull * raw;
+
+	if (stored < dyn && stored < fix) {
+		size_t pos = z->block_start;
+		do {
+			size_t k = end - pos > 65535 ? 65535 : end - pos;
+			int fin = last && pos + k == end;
+			ob_put(o, (uint32_t)fin, 3); /* BTYPE 00 */
+			ob_flush_bits(o);
+			uint8_t h[4] = { (uint8_t)k, (uint8_t)(k >> 8), (uint8_t)~k, (uint8_t)(~k >> 8) };
+			ob_bytes(o, h, 4);
+			ob_bytes(o, z->in + pos, k);
+			pos += k;
+		} while (pos < end);
+	} else if (fix <= dyn) {
+		uint16_t lc[288], dc[30];
+		huff_codes(fl, 288, lc);
+		huff_codes(fd, 30, dc);
+		ob_put(o, (uint32_t)last | 1u << 1, 3); /* BTYPE 01 */
+		write_symbols(z, lc, fl, dc, fd);
+	} else {
+		uint16_t lc[286], dc[30], cc[19];
+		huff_codes(ll, 286, lc);
+		huff_codes(dl, 30, dc);
+		huff_codes(cl, 19, cc);
+		ob_put(o, (uint32_t)last | 2u << 1, 3); /* BTYPE 10 */
+		ob_put(o, (uint32_t)(hlit - 257), 5);
+		ob_put(o, (uint32_t)(hdist - 1), 5);
+		ob_put(o, (uint32_t)(hclen - 4), 4);
+		for (int i = 0; i < hclen; i++)
+			ob_put(o, cl[cl_order[i]], 3);
+		for (int i = 0; i < nr; i++) {
+			ob_put(o, cc[rle[i]], cl[rle[i]]);
+			if (rle[i] >= 16)
+				ob_put(o, rle_extra[i], rle[i] == 16 ? 2 : rle[i] == 17 ? 3 : 7);
+		}
+		write_symbols(z, lc, ll, dc, dl);
+	}
+	z->nsym = 0;
+	z->block_start = end;
+}
+
+static inline void add_sym(struct deflate *z, unsigned ll, unsigned d)
+{
+	z->sym_ll[z->nsym] = (uint16_t)ll;
+	z->sym_d[z->nsym] = (uint16_t)d;
+	z->nsym++;
+}
+
+/*
+ * Compresses in[0..n) as a raw deflate stream appended to o. Returns 0, or
+ * -1 when out of memory (o->oom may also be set).
+ */
+static int deflate_raw(const uint8_t *in, size_t n, struct obuf *o)
+{
+	struct deflate z;
+	memset(&z, 0, sizeof z);
+	z.in = in;
+	z.n = n;
+	z.o = o;
+	z.head = calloc(HSIZE, sizeof *z.head);
+	z.prev = calloc(WSIZE, sizeof *z.prev);
+	z.sym_ll = malloc(BLOCK_SYMS * sizeof *z.sym_ll);
+	z.sym_d = malloc(BLOCK_SYMS * sizeof *z.sym_d);
+	int rc = -1;
+	if (!z.head || !z.prev || !z.sym_ll || !z.sym_d)
+		goto done;
+
+	/* one-step lazy matching: the byte at pos-1 may be pending (has_prev),
+	 * with the match found there (prev_len >= 3) or as a literal (0) */
+	size_t pos = 0;
+	int has_prev = 0, prev_len = 0;
+	unsigned prev_dist = 0;
+	while (pos < n) {
+		unsigned dist = 0;
+		int len = 0;
+		if (!has_prev || prev_len < LAZY_LEN)
+			len = longest_match(&z, pos, has_prev ? prev_len : 0, &dist);
+		if (has_prev && prev_len >= MIN_MATCH && len <= prev_len) {
+			/* the match at pos-1 wins: emit it, insert what it covers */
+			add_sym(&z, (unsigned)prev_len, prev_dist);
+			size_t stop = pos - 1 + (size_t)prev_len;
+			for (size_t q = pos; q < stop; q++)
+				insert(&z, q);
+			pos = stop;
+			has_prev = 0;
+		} else {
+			if (has_prev)
+				add_sym(&z, in[pos - 1], 0);
+			insert(&z, pos);
+			has_prev = 1;
+			prev_len = len;
+			prev_dist = dist;
+			pos++;
+		}
+		if (z.nsym >= BLOCK_SYMS - 2)
+			flush_block(&z, has_prev ? pos - 1 : pos, 0); /* pending byte: next block */
+	}
+	if (has_prev)
+		add_sym(&z, in[n - 1], 0); /* no match can start at n-1 */
+	flush_block(&z, n, 1);
+	rc = o->oom ? -1 : 0;
+done:
+	free(z.head);
+	free(z.prev);
+	free(z.sym_ll);
+	free(z.sym_d);
+	return rc;
+}
+
+/* ---- PNG ------------------------------------------------------------------------ */
+
+static inline uint8_t paeth(uint8_t a, uint8_t b, uint8_t c)
+{
+	int p = (int)a + b - c, pa = abs(p - a), pb = abs(p - b), pc = abs(p - c);
+	return pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
+}
+
+/*
+ * Filters the rows of rgb into out (h rows of 1 + 3w bytes), each row with
+ * the filter of least sum of |signed byte|. scratch holds 5 rows of 3w bytes.
+ */
+static void png_filter(const uint8_t *rgb, uint32_t w, uint32_t h, uint8_t *out, uint8_t *scratch)
+{
+	size_t rb = 3 * (size_t)w;
+	for (uint32_t y = 0; y < h; y++) {
+		const uint8_t *cur = rgb + y * rb, *up = y ? cur - rb : NULL;
+		uint64_t best_sum = UINT64_MAX;
+		int best = 0;
+		for (int f = 0; f < 5; f++) {
+			uint8_t *d = scratch + (size_t)f * rb;
+			uint64_t sum = 0;
+			for (size_t i = 0; i < rb; i++) {
+				uint8_t a = i >= 3 ? cur[i - 3] : 0, b = up ? up[i] : 0;
+				uint8_t c = i >= 3 && up ? up[i - 3] : 0, v;
+				switch (f) {
+				case 0: v = cur[i]; break;
+				case 1: v = (uint8_t)(cur[i] - a); break;
+				case 2: v = (uint8_t)(cur[i] - b); break;
+				case 3: v = (uint8_t)(cur[i] - ((a + b) >> 1)); break;
+				default: v = (uint8_t)(cur[i] - paeth(a, b, c)); break;
+				}
+				d[i] = v;
+				sum += v < 128 ? v : 256 - v;
+			}
+			if (sum < best_sum) {
+				best_sum = sum;
+				best = f;
+			}
+		}
+		uint8_t *o = out + y * (rb + 1);
+		o[0] = (uint8_t)best;
+		memcpy(o + 1, scratch + (size_t)best * rb, rb);
+	}
+}
+
+static void png_chunk(struct obuf *o, const char *type, const uint8_t *data, size_t n)
+{
+	ob_be32(o, (uint32_t)n);
+	ob_bytes(o, type, 4);
+	if (n)
+		ob_bytes(o, data, n);
+	uint32_t crc = img_crc32(0, (const uint8_t *)type, 4);
+	ob_be32(o, img_crc32(crc, data, n));
+}
+
+static int img_size_ok(uint32_t w, uint32_t h)
+{
+	return w > 0 && h > 0 && w <= LIM_IMAGE_SIDE && h <= LIM_IMAGE_SIDE &&
+	       (uint64_t)w * h <= LIM_IMAGE_PIXELS;
+}
+
+/*
+ * Encodes w*h RGB8 pixels (rows top to bottom) as a PNG in memory. On success
+ * *out is malloc'd (the caller frees it) and 0 is returned; on failure -1
+ * with errno EINVAL (size outside LIM_IMAGE_*) or ENOMEM.
+ */
+int img_png_encode(const uint8_t *rgb, uint32_t w, uint32_t h, uint8_t **out, size_t *out_len)
+{
+	*out = NULL;
+	*out_len = 0;
+	if (!img_size_ok(w, h) || !rgb) {
+		errno = EINVAL;
+		return -1;
+	}
+	pthread_once(&tables_once, tables_init);
+	size_t rb = 3 * (size_t)w, raw_n = (rb + 1) * h;
+	uint8_t *filtered = malloc(raw_n), *scratch = malloc(5 * rb);
+	struct obuf zs = { 0 }, png = { 0 };
+	if (!filtered || !scratch)
+		goto oom;
+	png_filter(rgb, w, h, filtered, scratch);
+	free(scratch);
+	scratch = NULL;
+
+	/* zlib stream: CMF 0x78 (deflate, 32K window), FLG 0x9C (default level,
+	 * (CMF*256 + FLG) % 31 == 0), deflate data, Adler-32 big-endian */
+	ob_reserve(&zs, raw_n / 4 + 1024);
+	uint8_t zh[2] = { 0x78, 0x9C };
+	ob_bytes(&zs, zh, 2);
+	if (deflate_raw(filtered, raw_n, &zs) < 0)
+		goto oom;
+	ob_flush_bits(&zs);
+	ob_be32(&zs, img_adler32(1, filtered, raw_n));
+	free(filtered);
+	filtered = NULL;
+	if (zs.oom)
+		goto oom;
+
+	static const uint8_t sig[8] = { 0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n' };
+	ob_reserve(&png, zs.n + zs.n / 65536 * 12 + 128);
+	ob_bytes(&png, sig, 8);
+	uint8_t ihdr[13] = { (uint8_t)(w >> 24), (uint8_t)(w >> 16), (uint8_t)(w >> 8), (uint8_t)w,
+			     (uint8_t)(h >> 24), (uint8_t)(h >> 16), (uint8_t)(h >> 8), (uint8_t)h,
+			     8, 2, 0, 0, 0 }; /* 8 bits, RGB, deflate, adaptive filters, no interlace */
+	png_chunk(&png, "IHDR", ihdr, sizeof ihdr);
+	const size_t idat_max = 1u << 20;
+	for (size_t off = 0; off < zs.n; off += idat_max)
+		png_chunk(&png, "IDAT", zs.p + off, zs.n - off < idat_max ? zs.n - off : idat_max);
+	png_chunk(&png, "IEND", NULL, 0);
+	free(zs.p);
+	zs.p = NULL;
+	if (png.oom)
+		goto oom;
+	*out = png.p;
+	*out_len = png.n;
+	return 0;
+oom:
+	free(filtered);
+	free(scratch);
+	free(zs.p);
+	free(png.p);
+	errno = ENOMEM;
+	return -1;
+}
+
+/* ---- files ----------------------------------------------------------------------- */
+
+/* Writes all n bytes (short writes and EINTR retried). 0 or -1 with errno. */
+static int write_all(int fd, const uint8_t *p, size_t n)
+{
+	while (n > 0) {
+		ssize_t r = write(fd, p, n > (1u << 30) ? (1u << 30) : n);
+		if (r < 0 && errno == EINTR)
+			continue;
+		if (r < 0)
+			return -1;
+		if (r == 0) {
+			errno = EIO;
+			return -1;
+		}
+		p += r;
+		n -= (size_t)r;
+	}
+	return 0;
+}
+
+/* Case-insensitive "ends with .png". */
+static int is_png_name(const char *path)
+{
+	size_t n = strlen(path);
+	return n >= 4 && strcasecmp(path + n - 4, ".png") == 0;
+}
+
+/*
+ * Writes the image to path: PNG when the name ends in ".png" (any case),
+ * binary PPM (P6) for any other name. The bytes go to a new temporary file
+ * "<path>.tmp.<pid>.<n>" in the same directory (created with mode 0666 less
+ * the umask), are fsync'd, and the file is renamed over path, so path holds
+ * either its old content or the whole new image. On failure the temporary
+ * file is removed and -1 is returned with errno set.
+ */
+int img_write(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h)
+{
+	static unsigned counter;
+	uint8_t *data = NULL;
+	size_t n = 0;
+	char head[64];
+	int hn = 0;
+
+	if (!path || !*path || !img_size_ok(w, h) || !rgb) {
+		errno = EINVAL;
+		return -1;
+	}
+	if (is_png_name(path)) {
+		if (img_png_encode(rgb, w, h, &data, &n) < 0)
+			return -1;
+	} else {
+		hn = snprintf(head, sizeof head, "P6\n%u %u\n255\n", (unsigned)w, (unsigned)h);
+	}
+
+	size_t plen = strlen(path);
+	char *tmp = malloc(plen + 64);
+	if (!tmp) {
+		free(data);
+		errno = ENOMEM;
+		return -1;
+	}
+	int fd = -1;
+	for (int tries = 0; tries < 100 && fd < 0; tries++) {
+		unsigned k = __atomic_add_fetch(&counter, 1, __ATOMIC_RELAXED);
+		snprintf(tmp, plen + 64, "%s.tmp.%ld.%u", path, (long)getpid(), k);
+		fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+		if (fd < 0 && errno != EEXIST)
+			break;
+	}
+	if (fd < 0) {
+		int e = errno;
+		free(data);
+		free(tmp);
+		errno = e;
+		return -1;
+	}
+	int rc;
+	if (data)
+		rc = write_all(fd, data, n);
+	else
+		rc = write_all(fd, (const uint8_t *)head, (size_t)hn) < 0 ||
+				     write_all(fd, rgb, 3 * (size_t)w * h) < 0
+			     ? -1
+			     : 0;
+	if (rc == 0)
+		rc = fsync(fd);
+	if (close(fd) < 0 && rc == 0)
+		rc = -1;
+	if (rc == 0)
+		rc = rename(tmp, path);
+	if (rc != 0) {
+		int e = errno;
+		unlink(tmp);
+		errno = e;
+	}
+	free(data);
+	free(tmp);
+	return rc == 0 ? 0 : -1;
+}
