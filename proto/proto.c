@@ -38,6 +38,10 @@ uint32_t proto_crc32(uint32_t crc, const uint8_t *p, size_t n)
 #ifndef PORTRAY_VERSION
 #define PORTRAY_VERSION "dev"
 #endif
+/* the versions as plain numbers for the build id (the header constants carry a u suffix) */
+#define PROTO_BUILD_PROTO 1
+#define PROTO_BUILD_SCENE 1
+_Static_assert(PROTO_BUILD_PROTO == PROTO_VERSION && PROTO_BUILD_SCENE == PROTO_SCENE_VERSION, "build id numbers");
 #define STR2(x) #x
 #define STR(x) STR2(x)
 
@@ -45,7 +49,7 @@ const char *proto_build_id(void)
 {
 	/* The core's version and the scene encoding's: two builds that agree on
 	 * these trace the same pixels (the same sources, flags set by the Makefile). */
-	return "portray-" PORTRAY_VERSION "/scene-" STR(PROTO_SCENE_VERSION);
+	return "portray-" PORTRAY_VERSION "/proto-" STR(PROTO_BUILD_PROTO) "/scene-" STR(PROTO_BUILD_SCENE);
 }
 
 const char *proto_type_name(int type)
