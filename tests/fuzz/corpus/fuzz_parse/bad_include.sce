@@ -1,0 +1,1 @@
+object sphere ; include x.inc ;

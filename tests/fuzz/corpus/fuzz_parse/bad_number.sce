@@ -1,0 +1,2 @@
+object sphere radius 1.2.3 ; ;
+~ unfinished

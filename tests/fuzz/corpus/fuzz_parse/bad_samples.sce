@@ -1,0 +1,1 @@
+light samples 4 ;

@@ -1,0 +1,1 @@
+object sphere ; material called nowhere ; ;
