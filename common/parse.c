@@ -18,6 +18,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -42,6 +43,17 @@
 struct inc_id {
 	dev_t dev;
 	ino_t ino;
+};
+
+/*
+ * Case-insensitive name -> index table (open addressing, linear probing),
+ * so that `called NAME` and defined-object uses cost O(1) even in scenes
+ * with many names. Keys are the scene's own name strings; a name defined
+ * again points at its latest index, as scene_find_* would answer.
+ */
+struct name_table {
+	uint32_t *slot; /* index + 1, 0 = empty */
+	uint32_t cap, n; /* cap is a power of two */
 };
 
 struct parser {
@@ -70,6 +82,8 @@ struct parser {
 	char **mesh_path;
 	uint32_t cap_mesh_path;
 	int csg_depth, shader_depth;
+	/* name -> latest index, for materials and defines (case-insensitive) */
+	struct name_table mat_names, def_names;
 };
 
 /* ---- messages --------------------------------------------------------------- */
@@ -315,6 +329,80 @@ static void tok_str(const struct token *t, char *buf)
 {
 	memcpy(buf, t->text, t->len);
 	buf[t->len] = '\0';
+}
+
+/* ---- names -------------------------------------------------------------------- */
+
+static uint32_t name_hash(const char *k)
+{
+	uint32_t h = 2166136261u;
+	for (; *k; k++) {
+		unsigned char c = (unsigned char)*k;
+		if (c >= 'A' && c <= 'Z')
+			c = (unsigned char)(c + ('a' - 'A'));
+		h = (h ^ c) * 16777619u;
+	}
+	return h;
+}
+
+/* Looks name up; names(i) gives the name of index i. SCENE_NONE when absent. */
+static uint32_t names_find(const struct name_table *t, const char *name, const char *(*names)(const struct scene *, uint32_t),
+			   const struct scene *s)
+{
+	if (!t->cap)
+		return SCENE_NONE;
+	for (uint32_t h = name_hash(name) & (t->cap - 1);; h = (h + 1) & (t->cap - 1)) {
+		uint32_t v = t->slot[h];
+		if (!v)
+			return SCENE_NONE;
+		if (strcasecmp(names(s, v - 1), name) == 0)
+			return v - 1;
+	}
+}
+
+/* Records index id under its name (replacing an older entry). 0 or -1 (OOM). */
+static int names_put(struct name_table *t, uint32_t id, const char *(*names)(const struct scene *, uint32_t),
+		     const struct scene *s)
+{
+	if ((t->n + 1) * 2 > t->cap) {
+		uint32_t nc = t->cap ? t->cap * 2 : 64;
+		uint32_t *ns = calloc(nc, sizeof *ns);
+		if (!ns)
+			return -1;
+		for (uint32_t i = 0; i < t->cap; i++) {
+			uint32_t v = t->slot[i];
+			if (!v)
+				continue;
+			uint32_t h = name_hash(names(s, v - 1)) & (nc - 1);
+			while (ns[h])
+				h = (h + 1) & (nc - 1);
+			ns[h] = v;
+		}
+		free(t->slot);
+		t->slot = ns;
+		t->cap = nc;
+	}
+	const char *name = names(s, id);
+	uint32_t h = name_hash(name) & (t->cap - 1);
+	while (t->slot[h] && strcasecmp(names(s, t->slot[h] - 1), name) != 0)
+		h = (h + 1) & (t->cap - 1);
+	if (!t->slot[h])
+		t->n++;
+	t->slot[h] = id + 1;
+	return 0;
+}
+
+static const char *mat_name(const struct scene *s, uint32_t i) { return s->materials[i].name; }
+static const char *def_name(const struct scene *s, uint32_t i) { return s->defines[i].name; }
+
+static uint32_t find_material(const struct parser *P, const char *name)
+{
+	return names_find(&P->mat_names, name, mat_name, P->s);
+}
+
+static uint32_t find_define(const struct parser *P, const char *name)
+{
+	return names_find(&P->def_names, name, def_name, P->s);
 }
 
 /* ---- bookkeeping ------------------------------------------------------------ */
@@ -858,7 +946,7 @@ static int parse_reference(struct parser *P, struct primctx *c, mat34 *xf, bool 
 	struct token open = P->tok;
 	char name[LIM_TOKEN_LEN + 1];
 	tok_str(&open, name);
-	uint32_t d = scene_find_define(P->s, name);
+	uint32_t d = find_define(P, name);
 	if (d == SCENE_NONE) {
 		const struct token *nx = peek(P);
 		if (nx->kind == TK_SEMI || (nx->kind == TK_WORD && (is_transform_kw(nx->kw) || nx->kw == KW_MATERIAL)))
@@ -1000,7 +1088,7 @@ static int parse_matarg(struct parser *P, const struct token *kw, uint32_t *id)
 			return err_near(P, &P->tok, "material name expected after 'called'");
 		char name[LIM_TOKEN_LEN + 1];
 		tok_str(&P->tok, name);
-		*id = scene_find_material(P->s, name);
+		*id = find_material(P, name);
 		if (*id == SCENE_NONE)
 			return err_at(P, ERRLEVEL_FATAL, &P->tok, "undefined material '%s'", name);
 		(void)called;
@@ -1212,7 +1300,7 @@ static int parse_material(struct parser *P, const struct token *open, bool need_
 					    called_name, first_setting.line);
 				goto fail;
 			}
-			called = scene_find_material(P->s, called_name);
+			called = find_material(P, called_name);
 			if (called == SCENE_NONE) {
 				rc = err_at(P, ERRLEVEL_FATAL, &P->tok, "undefined material '%s'", called_name);
 				goto fail;
@@ -1275,8 +1363,11 @@ static int parse_material(struct parser *P, const struct token *open, bool need_
 			rc = err_near(P, &P->tok, "a defined material needs 'named NAME'");
 			goto fail;
 		}
+		bool named = m.name != NULL;
 		if ((rc = scene_add_material(P->s, &m, id, P->err)) != 0)
 			goto out; /* the scene freed m's name and fades */
+		if (named && names_put(&P->mat_names, *id, mat_name, P->s) < 0)
+			return err_at(P, ERRLEVEL_FATAL, open, "out of memory");
 	}
 	next(P);
 	P->shader_depth--;
@@ -1674,6 +1765,8 @@ static int parse_define_object(struct parser *P, const struct token *open)
 	uint32_t id;
 	if ((rc = scene_add_define(P->s, &d, &id, P->err)) != 0)
 		return rc; /* the scene freed d's arrays */
+	if (names_put(&P->def_names, id, def_name, P->s) < 0)
+		return err_at(P, ERRLEVEL_FATAL, open, "out of memory");
 	if (grow_bytes(&P->def_depth, &P->cap_def_depth, P->s->n_defines) < 0)
 		return err_at(P, ERRLEVEL_FATAL, open, "out of memory");
 	P->def_depth[id] = (unsigned char)(depth + 1);
@@ -1912,6 +2005,8 @@ static void parser_free(struct parser *P)
 	for (uint32_t i = 0; i < P->cap_mesh_path; i++)
 		free(P->mesh_path[i]);
 	free(P->mesh_path);
+	free(P->mat_names.slot);
+	free(P->def_names.slot);
 }
 
 /* After everything is read: the image's intersect-buffer sizes the cache of

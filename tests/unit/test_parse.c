@@ -554,7 +554,24 @@ static void test_many(void)
 	CHECK(s && s->n_objects == 20000 && s->n_materials == 1);
 	CHECK(secs < 2.0);
 	scene_free(s);
+	/* many names: lookups must not be linear (20000 x 20000 would take seconds) */
+	n = 0;
+	for (int i = 0; i < 20000; i++)
+		n += (size_t)snprintf(buf + n, cap - n, "material named m%d ;\n", i);
+	for (int i = 0; i < 20000 && n + 60 < cap; i++)
+		n += (size_t)snprintf(buf + n, cap - n, "object sphere ; material called M%d ; ;\n", i);
+	t0 = clock();
+	s = ok(buf);
+	secs = (double)(clock() - t0) / CLOCKS_PER_SEC;
+	CHECK(s && s->n_materials == 20000 && s->n_objects > 10000 && s->objects[123].material == 123);
+	CHECK(secs < 2.0);
+	scene_free(s);
 	free(buf);
+	/* a redefined name: the latest wins */
+	s = ok("material named a colour (1 0 0) ; material named A colour (0 1 0) ; object sphere ; material called a ; ; "
+	       "define object name d object sphere ; ; ; ; define object name D object box ; ; ; ; object d ; ;");
+	CHECK(s && s->objects[0].material == 1 && s->objects[s->roots[1]].u.instance.define == 1);
+	scene_free(s);
 }
 
 static char tmpdir[64];
