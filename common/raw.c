@@ -303,7 +303,9 @@ static uint32_t raw_weld_point(struct raw_weld *w, vec3 p)
 					if (!dx && !dy && !dz)
 						continue;
 					double n[3] = { k[0] + dx, k[1] + dy, k[2] + dz };
-					/* beyond 2^53 k+-1 == k: that cell was searched already */
+					/* beyond 2^53, k+-1 may round to k: that cell was
+					 * searched already, and there x >= 2^53 * cell makes
+					 * distinct coordinates differ by an ulp > d anyway */
 					if (n[0] == k[0] && n[1] == k[1] && n[2] == k[2])
 						continue;
 					size_t s = raw_slot(w, n);

@@ -293,8 +293,13 @@ static void test_weld_random(void)
 	static double pts[NT * 9];
 	static vec3 kept[NT * 3];
 	uint32_t seed = 12345;
-	for (int round = 0; round < 4; round++) {
-		double d = round == 0 ? 0.01 : round == 1 ? 0.003 : round == 2 ? 1e-5 : 0.25;
+	/* (d, offset): far from the origin the grid keys pass 2^52 and 2^53,
+	 * where doubles are spaced by about d */
+	static const double rounds[][2] = { { 0.01, 0 },     { 0.003, 0 },    { 1e-5, 0 },  { 0.25, 0 },
+					    { 1e-5, 3e10 },  { 1e-5, 6e10 },  { 1e-4, 1e12 }, { 3e-4, 1e12 },
+					    { 0.01, -7e13 } };
+	for (size_t round = 0; round < sizeof rounds / sizeof rounds[0]; round++) {
+		double d = rounds[round][0], base = rounds[round][1];
 		char *text = malloc(NT * 9 * 32);
 		size_t o = 0;
 		for (int i = 0; i < NT * 9; i++) {
@@ -303,7 +308,7 @@ static void test_weld_random(void)
 			seed = seed * 1664525u + 1013904223u;
 			double noise = ((seed >> 8) / 16777216.0 - 0.5) * 3 * d;
 			char num[40];
-			snprintf(num, sizeof num, "%.17g", lat * 0.02 + noise - 0.04);
+			snprintf(num, sizeof num, "%.17g", base ? base + lat * 2 * d + noise : lat * 0.02 + noise - 0.04);
 			pts[i] = strtod(num, NULL);
 			o += (size_t)sprintf(text + o, "%s%c", num, i % 9 == 8 ? '\n' : ' ');
 		}
@@ -319,8 +324,12 @@ static void test_weld_random(void)
 				mismatches++;
 		}
 		CHECK(mismatches == 0);
+		if (mismatches)
+			fprintf(stderr, "weld round %zu: %u mismatches\n", round, mismatches);
 		CHECK(m.n_vertices == nk);
 		CHECK(nk > 1 && nk < NT * 3); /* the case is not trivial */
+		if (getenv("TEST_RAW_VERBOSE"))
+			fprintf(stderr, "weld round %zu: %u vertices of %d\n", round, nk, NT * 3);
 		mesh_done(&m);
 		free(text);
 	}
