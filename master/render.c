@@ -147,8 +147,8 @@ int master_render(const struct master_opts *o)
 		double tr = t_render - t_build;
 		uint64_t rays = renderer_rays(r);
 		fprintf(stderr,
-			"portray-master: %s: %ux%u, %d thread%s, %llu tiles, %.2f s (parse %.2f, build %.2f, "
-			"trace %.2f), %llu eye rays, %.2f Mrays/s\n",
+			"portray-master: %s: %ux%u, %d thread%s, %llu tiles, %.3f s (parse %.3f, build %.3f, "
+			"trace %.3f), %llu eye rays, %.2f Mrays/s\n",
 			out, w, h, threads, threads == 1 ? "" : "s", (unsigned long long)total,
 			t_render - t0, t_parse - t0, t_build - t_parse, tr, (unsigned long long)rays,
 			tr > 0 ? rays / tr * 1e-6 : 0.0);
