@@ -52,6 +52,7 @@ static struct {
 	size_t secret_len;
 	uint64_t cache_bytes;
 	enum wk_fault fault;
+	int delay_ms;      /* test hook: extra time per tile, so tests can act mid-render */
 } opt;
 
 static volatile sig_atomic_t stop_flag;
@@ -294,6 +295,10 @@ static void *tracer(void *arg)
 		if (d && px) {
 			struct tile_rect rect = { t.x, t.y, t.w, t.h };
 			ok = renderer_tile_cancellable(r, rect, px, &pool.cancel_all);
+			if (opt.delay_ms > 0) {
+				struct timespec ts = { opt.delay_ms / 1000, (long)(opt.delay_ms % 1000) * 1000000L };
+				nanosleep(&ts, NULL);
+			}
 		}
 		pthread_mutex_lock(&pool.mu);
 		j->running--;
@@ -947,7 +952,7 @@ static int write_port_file(const char *path, int port)
 	return 0;
 }
 
-enum { OPT_LISTEN = 256, OPT_SECRET, OPT_PORTFILE, OPT_CACHE, OPT_FAULT };
+enum { OPT_LISTEN = 256, OPT_SECRET, OPT_PORTFILE, OPT_CACHE, OPT_FAULT, OPT_DELAY };
 
 int main(int argc, char **argv)
 {
@@ -958,6 +963,7 @@ int main(int argc, char **argv)
 		{ "port-file", required_argument, NULL, OPT_PORTFILE },
 		{ "cache-mb", required_argument, NULL, OPT_CACHE },
 		{ "test-fault", required_argument, NULL, OPT_FAULT }, /* hidden: for tests */
+		{ "test-delay-ms", required_argument, NULL, OPT_DELAY }, /* hidden: for tests */
 		{ "help", no_argument, NULL, 'h' },
 		{ "version", no_argument, NULL, 'V' },
 		{ NULL, 0, NULL, 0 },
@@ -996,6 +1002,13 @@ int main(int argc, char **argv)
 				opt.fault = FAULT_BLACK;
 			else {
 				fprintf(stderr, "portray-worker: unknown --test-fault '%s'\n", optarg);
+				return 64;
+			}
+			break;
+		case OPT_DELAY:
+			opt.delay_ms = (int)strtol(optarg, &end, 10);
+			if (*end || opt.delay_ms < 0 || opt.delay_ms > 60000) {
+				fprintf(stderr, "portray-worker: --test-delay-ms wants 0..60000\n");
 				return 64;
 			}
 			break;

@@ -1,0 +1,29 @@
+#!/bin/sh
+# Master + two workers render a scene with every primitive: the image is
+# byte-identical to the local render, with and without local threads, and
+# at a --size other than the scene's.
+. "$(dirname "$0")/farm_lib.inc"
+start_worker a -j 1
+start_worker b -j 2
+W=127.0.0.1:$a_PORT,127.0.0.1:$b_PORT
+
+local_render "$SCENE" "$T/local.ppm"
+"$BIN/portray-master" "$SCENE" -o "$T/farm.ppm" -w "$W" --no-local --tile 16 2>"$T/m1.log" ||
+	fail "farm render (--no-local) failed"
+cmp "$T/local.ppm" "$T/farm.ppm" || fail "farm image (--no-local) differs from the local render"
+grep -q "127.0.0.1:$a_PORT .* tiles" "$T/m1.log" || fail "no summary line for worker a"
+grep -q "127.0.0.1:$b_PORT .* tiles" "$T/m1.log" || fail "no summary line for worker b"
+
+# local threads join in; PNG output this time
+local_render "$SCENE" "$T/local.png"
+"$BIN/portray-master" "$SCENE" -o "$T/farm.png" -w "$W" -j 1 --tile 8 2>"$T/m2.log" || fail "farm render with local threads failed"
+cmp "$T/local.png" "$T/farm.png" || fail "farm image (with local threads) differs from the local render"
+
+# another size than the image statement's: the job carries it
+local_render "$SCENE" "$T/local2.ppm" --size 50x37
+"$BIN/portray-master" "$SCENE" -o "$T/farm2.ppm" -w "$W" --no-local --size 50x37 -q || fail "farm --size failed"
+cmp "$T/local2.ppm" "$T/farm2.ppm" || fail "farm image at --size 50x37 differs"
+
+# every job logged one line on the workers
+[ "$(grep -c ' job ' "$T/a.log")" -ge 3 ] || fail "worker a did not log its jobs"
+echo "ok"

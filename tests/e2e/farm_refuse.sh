@@ -1,0 +1,43 @@
+#!/bin/sh
+# Refusals, each with a clear message on both sides: wrong secret, missing
+# secret, protocol version mismatch. With --no-local and no usable worker
+# the master fails with exit code 69; without --no-local it renders locally.
+. "$(dirname "$0")/farm_lib.inc"
+printf 'correct horse battery staple\n' >"$T/secret"
+printf 'something else\n' >"$T/wrong"
+start_worker s -j 1 --secret-file "$T/secret"
+start_worker v -j 1 --test-fault proto-version
+local_render "$SCENE" "$T/local.ppm"
+
+# right secret: works
+"$BIN/portray-master" "$SCENE" -o "$T/ok.ppm" --no-local -w "127.0.0.1:$s_PORT" --secret-file "$T/secret" 2>"$T/m0.log" ||
+	fail "render with the right secret failed"
+cmp "$T/local.ppm" "$T/ok.ppm" || fail "image differs with a secret"
+
+# wrong secret
+"$BIN/portray-master" "$SCENE" -o "$T/x.ppm" --no-local -w "127.0.0.1:$s_PORT" --secret-file "$T/wrong" 2>"$T/m1.log"
+rc=$?
+[ $rc -eq 69 ] || fail "wrong secret: exit $rc, expected 69"
+grep -q "authentication failed" "$T/m1.log" || fail "wrong secret: master message unclear"
+grep -q "every worker is lost and --no-local" "$T/m1.log" || fail "no final message"
+grep -q "refused: authentication failed: the master's secret differs" "$T/s.log" || fail "wrong secret: worker message unclear"
+
+# no secret at all against a worker that wants one
+"$BIN/portray-master" "$SCENE" -o "$T/x.ppm" --no-local -w "127.0.0.1:$s_PORT" 2>"$T/m2.log"
+[ $? -eq 69 ] || fail "missing secret: wrong exit code"
+grep -q "requires a shared secret" "$T/m2.log" || fail "missing secret: master message unclear"
+grep -q "refused: this worker requires a shared secret" "$T/s.log" || fail "missing secret: worker message unclear"
+
+# protocol version mismatch
+"$BIN/portray-master" "$SCENE" -o "$T/x.ppm" --no-local -w "127.0.0.1:$v_PORT" 2>"$T/m3.log"
+[ $? -eq 69 ] || fail "version mismatch: wrong exit code"
+grep -q "protocol version mismatch: worker speaks version 2, master speaks 1" "$T/m3.log" ||
+	fail "version mismatch: master message unclear"
+grep -q "refused: protocol version mismatch: master speaks version 1, worker speaks 2" "$T/v.log" ||
+	fail "version mismatch: worker message unclear"
+
+# all workers refused but local threads allowed: the render completes locally
+"$BIN/portray-master" "$SCENE" -o "$T/l.ppm" -w "127.0.0.1:$v_PORT,127.0.0.1:$s_PORT" 2>"$T/m4.log" ||
+	fail "render with only refused workers failed"
+cmp "$T/local.ppm" "$T/l.ppm" || fail "image differs when rendered locally after refusals"
+echo ok
