@@ -36,6 +36,7 @@ struct shade_ctx {
 	const struct accel *a;
 	struct shade_light *lights;
 	uint32_t n_lights;
+	double total_samples; /* light samples per shading point, all lights (>= 1) */
 	bool any_transparent; /* some material has transparency > 0 */
 };
 
@@ -77,6 +78,9 @@ int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx
 			L->total_area = L->area[0] + L->area[1] + L->area[2];
 		}
 	}
+	c->total_samples = 1;
+	for (uint32_t i = 0; i < s->n_lights; i++)
+		c->total_samples += s->lights[i].shape == LIGHT_POINT ? 1 : s->lights[i].samples;
 	for (uint32_t i = 0; i < s->n_materials; i++)
 		if (s->materials[i].transparency > 0)
 			c->any_transparent = true;
@@ -96,6 +100,7 @@ void shade_ctx_free(struct shade_ctx *c)
 }
 
 static double maxc(vec3 a) { return fmax(a.x, fmax(a.y, a.z)); }
+static double maxabs(vec3 a) { return fmax(fabs(a.x), fmax(fabs(a.y), fabs(a.z))); }
 
 static double frac(double x) { return x - floor(x); }
 
@@ -185,24 +190,29 @@ static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp)
 
 /*
  * Direct lighting at p (shading normal n facing the viewer, geometric
- * normal ng on the same side, unit direction to the viewer v): sums over
- * lights and light samples into *diff (light reaching the surface, times
- * N.L) and *spec (light times (R.V)^power).
+ * normal ng on the same side, unit direction to the viewer v) for material
+ * m whose diffuse weight is kd (diffuse-reflection x (1 - transparency)):
+ * the Lambert and Phong terms of the lighting equation summed over lights
+ * and light samples. weight is what the ray contributes to its pixel: a
+ * sample whose whole contribution would be below SHADE_MIN_WEIGHT / (all
+ * samples of all lights) is skipped without its shadow ray, so the error
+ * this makes in a pixel is below SHADE_MIN_WEIGHT.
  */
-static void direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, const struct shader_mat *m,
-		   uint64_t seed, vec3 *diff, vec3 *spec)
+static vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, const struct shader_mat *m,
+		   double kd, double weight, uint64_t seed)
 {
 	bool shadows = !c->s->image.no_shadows;
 	bool want_spec = m->specular != 0;
-	*diff = v3(0, 0, 0);
-	*spec = v3(0, 0, 0);
+	vec3 kcd = v3_scale(m->diff_colour, kd), kcs = v3_scale(m->spec_colour, m->specular);
+	double cut = SHADE_MIN_WEIGHT / c->total_samples;
+	vec3 col = v3(0, 0, 0);
 	for (uint32_t i = 0; i < c->n_lights; i++) {
 		const struct shade_light *L = &c->lights[i];
 		const struct scene_light *l = L->l;
 		int n_samples = l->shape == LIGHT_POINT ? 1 : l->samples;
 		uint64_t ls = rng_derive(seed, TAG_LIGHT + i);
 		double r1 = rng_uniform(ls, 0), r2 = rng_uniform(ls, 1);
-		vec3 sum_d = v3(0, 0, 0), sum_s = v3(0, 0, 0);
+		vec3 sum = v3(0, 0, 0);
 		for (int k = 0; k < n_samples; k++) {
 			vec3 lp = light_point(L, k, n_samples, r1, r2);
 			vec3 to = v3_sub(lp, p);
@@ -213,28 +223,29 @@ static void direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, c
 			double ndotl = v3_dot(n, ldir);
 			if (ndotl <= 0)
 				continue;
-			double rv = 0;
+			double hl = 0; /* (R.V)^power */
 			if (want_spec) {
-				vec3 refl = v3_sub(v3_scale(n, 2 * ndotl), ldir);
-				rv = v3_dot(refl, v);
+				double rv = v3_dot(v3_sub(v3_scale(n, 2 * ndotl), ldir), v);
+				if (rv > 0)
+					hl = pow(rv, m->spec_power);
 			}
 			vec3 in = l->colour;
 			if (l->fall_off != 0)
 				in = v3_scale(in, 1 / pow(dist, l->fall_off));
+			vec3 term = v3_mul(in, v3_add(v3_scale(kcd, ndotl), v3_scale(kcs, hl)));
+			if (maxabs(term) * weight < cut * n_samples)
+				continue;
 			if (shadows && !l->no_shadows) {
-				vec3 o = offset(p, ng, ldir);
-				vec3 t = transmittance(c, o, lp);
+				vec3 t = transmittance(c, offset(p, ng, ldir), lp);
 				if (maxc(t) <= 0)
 					continue;
-				in = v3_mul(in, t);
+				term = v3_mul(term, t);
 			}
-			sum_d = v3_add(sum_d, v3_scale(in, ndotl));
-			if (rv > 0)
-				sum_s = v3_add(sum_s, v3_scale(in, pow(rv, m->spec_power)));
+			sum = v3_add(sum, term);
 		}
-		*diff = v3_add(*diff, v3_scale(sum_d, 1.0 / n_samples));
-		*spec = v3_add(*spec, v3_scale(sum_s, 1.0 / n_samples));
+		col = v3_add(col, v3_scale(sum, 1.0 / n_samples));
 	}
+	return col;
 }
 
 /* d reflected about unit n. */
@@ -271,10 +282,7 @@ static vec3 trace(const struct shade_ctx *c, const struct ray *r, int depth, dou
 	vec3 v = v3_neg(d);
 	double td = m.transparency < 0 ? 0 : m.transparency > 1 ? 1 : m.transparency;
 
-	vec3 diff, spec;
-	direct(c, h.p, n, ng, v, &m, seed, &diff, &spec);
-	vec3 col = v3_add(v3_scale(v3_mul(m.diff_colour, diff), m.diffuse * (1 - td)),
-			  v3_scale(v3_mul(m.spec_colour, spec), m.specular));
+	vec3 col = direct(c, h.p, n, ng, v, &m, m.diffuse * (1 - td), weight, seed);
 
 	if (depth >= LIM_TRACE_DEPTH)
 		return col;
