@@ -137,20 +137,35 @@ static void trace_init(struct trace *r, vec3 o, vec3 d, double tmin, double tmax
 	r->tmax = tmax;
 }
 
+/* The ray as the slab test wants it: kept in locals during a traversal. */
+struct slab_ray {
+	double ox, oy, oz, ix, iy, iz;
+	int nx, ny, nz, fx, fy, fz; /* indices of the near and far planes in bvh_node.b */
+};
+
+static inline struct slab_ray slab_ray_of(const struct trace *r)
+{
+	struct slab_ray q = { r->o.x, r->o.y, r->o.z, r->inv[0], r->inv[1], r->inv[2],
+			      3 * r->sgn[0], 1 + 3 * r->sgn[1], 2 + 3 * r->sgn[2],
+			      3 - 3 * r->sgn[0], 4 - 3 * r->sgn[1], 5 - 3 * r->sgn[2] };
+	return q;
+}
+
 /* Robust slab test (Ize 2013): exact float bounds, double arithmetic, and
  * the far distance widened by 2 gamma(3) to cover the rounding. */
-static inline bool node_hit(const struct bvh_node *nd, const struct trace *r, double *tnear)
+static inline bool node_hit(const struct bvh_node *nd, const struct slab_ray *q, double tmin, double tmax,
+			    double *tnear)
 {
-	double tx0 = ((double)nd->b[r->sgn[0]][0] - r->o.x) * r->inv[0];
-	double tx1 = ((double)nd->b[1 - r->sgn[0]][0] - r->o.x) * r->inv[0];
-	double ty0 = ((double)nd->b[r->sgn[1]][1] - r->o.y) * r->inv[1];
-	double ty1 = ((double)nd->b[1 - r->sgn[1]][1] - r->o.y) * r->inv[1];
-	double tz0 = ((double)nd->b[r->sgn[2]][2] - r->o.z) * r->inv[2];
-	double tz1 = ((double)nd->b[1 - r->sgn[2]][2] - r->o.z) * r->inv[2];
-	double t0 = tx0 > r->tmin ? tx0 : r->tmin;
+	double tx0 = ((double)nd->b[q->nx] - q->ox) * q->ix;
+	double tx1 = ((double)nd->b[q->fx] - q->ox) * q->ix;
+	double ty0 = ((double)nd->b[q->ny] - q->oy) * q->iy;
+	double ty1 = ((double)nd->b[q->fy] - q->oy) * q->iy;
+	double tz0 = ((double)nd->b[q->nz] - q->oz) * q->iz;
+	double tz1 = ((double)nd->b[q->fz] - q->oz) * q->iz;
+	double t0 = tx0 > tmin ? tx0 : tmin;
 	t0 = ty0 > t0 ? ty0 : t0;
 	t0 = tz0 > t0 ? tz0 : t0;
-	double t1 = tx1 < r->tmax ? tx1 : r->tmax;
+	double t1 = tx1 < tmax ? tx1 : tmax;
 	t1 = ty1 < t1 ? ty1 : t1;
 	t1 = tz1 < t1 ? tz1 : t1;
 	t1 += fabs(t1) * 4.5e-16; /* 1 + 2 gamma(3) for doubles, rounded up */
@@ -387,40 +402,67 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 	bool found = false;
 	for (uint32_t k = 0; k < g->n_unb; k++)
 		found |= ref_test(A, g, g->unb[k], r, &best, brute);
-	if (brute) {
+	if (brute) { /* every primitive, kind by kind, without the tree */
+		for (uint32_t k = 0; k < g->n_sph; k++) {
+			double t;
+			if (sphere_test(&g->sph[k], r, &t)) {
+				best.ref = REF_MAKE(REF_SPHERE, k);
+				best.t = r->tmax = t;
+				found = true;
+			}
+		}
+		for (uint32_t k = 0; k < g->n_tri;) { /* a mesh's triangles are consecutive */
+			const struct gmesh *m = &g->mesh[g->tri[k].mesh];
+			uint32_t mi = g->tri[k].mesh;
+			for (; k < g->n_tri && g->tri[k].mesh == mi; k++) {
+				const uint32_t *ix = tri_ix(m, g->tri[k].tri);
+				double t, b1, b2;
+				if (geom_tri_hit(&r->w, m->v[ix[0]], m->v[ix[1]], m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2)) {
+					best.ref = REF_MAKE(REF_TRI, k);
+					best.t = r->tmax = t;
+					best.b1 = b1;
+					best.b2 = b2;
+					found = true;
+				}
+			}
+		}
 		for (uint32_t k = 0; k < g->n_refs; k++)
-			found |= ref_test(A, g, g->refs[k], r, &best, brute);
+			if (REF_KIND(g->refs[k]) >= REF_XPRIM)
+				found |= ref_test(A, g, g->refs[k], r, &best, true);
 	} else if (g->bvh.n_nodes) {
 		const struct bvh_node *nodes = g->bvh.nodes;
+		const struct slab_ray q = slab_ray_of(r);
+		const double tmin = r->tmin;
+		double tmax = r->tmax;
 		uint32_t stack[BVH_MAX_DEPTH + 1];
 		double stack_t[BVH_MAX_DEPTH + 1];
 		int sp = 0;
 		double tn;
 		uint32_t ni = 0;
-		if (!node_hit(&nodes[0], r, &tn))
+		if (!node_hit(&nodes[0], &q, tmin, tmax, &tn))
 			goto done;
 		for (;;) {
 			const struct bvh_node *nd = &nodes[ni];
 			if (nd->n) {
 				for (uint32_t k = 0; k < nd->n; k++)
 					found |= ref_test(A, g, g->refs[nd->idx + k], r, &best, false);
+				tmax = r->tmax;
 			} else {
 				double t0, t1;
-				bool h0 = node_hit(&nodes[nd->idx], r, &t0);
-				bool h1 = node_hit(&nodes[nd->idx + 1], r, &t1);
+				bool h0 = node_hit(&nodes[nd->idx], &q, tmin, tmax, &t0);
+				bool h1 = node_hit(&nodes[nd->idx + 1], &q, tmin, tmax, &t1);
 				if (h0 && h1) {
 					uint32_t near = nd->idx, far = nd->idx + 1;
 					if (t1 < t0) {
 						near = far, far = nd->idx;
-						double tt = t0;
-						t0 = t1, t1 = tt;
+						t1 = t0;
 					}
 					stack[sp] = far;
 					stack_t[sp++] = t1;
 					ni = near;
 					continue;
 				}
-				if (h0 || h1) {
+				if (h0 | h1) {
 					ni = h0 ? nd->idx : nd->idx + 1;
 					continue;
 				}
@@ -430,7 +472,7 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 				if (sp == 0)
 					goto done;
 				sp--;
-				if (stack_t[sp] <= r->tmax)
+				if (stack_t[sp] <= tmax)
 					break;
 			}
 			ni = stack[sp];
@@ -450,11 +492,12 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 	if (!g->bvh.n_nodes)
 		return false;
 	const struct bvh_node *nodes = g->bvh.nodes;
+	const struct slab_ray q = slab_ray_of(r);
 	uint32_t stack[BVH_MAX_DEPTH + 1];
 	int sp = 0;
 	double tn;
 	uint32_t ni = 0;
-	if (!node_hit(&nodes[0], r, &tn))
+	if (!node_hit(&nodes[0], &q, r->tmin, r->tmax, &tn))
 		return false;
 	for (;;) {
 		const struct bvh_node *nd = &nodes[ni];
@@ -464,14 +507,14 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 					return true;
 		} else {
 			double t0, t1;
-			bool h0 = node_hit(&nodes[nd->idx], r, &t0);
-			bool h1 = node_hit(&nodes[nd->idx + 1], r, &t1);
+			bool h0 = node_hit(&nodes[nd->idx], &q, r->tmin, r->tmax, &t0);
+			bool h1 = node_hit(&nodes[nd->idx + 1], &q, r->tmin, r->tmax, &t1);
 			if (h0 && h1) {
 				stack[sp++] = nd->idx + 1;
 				ni = nd->idx;
 				continue;
 			}
-			if (h0 || h1) {
+			if (h0 | h1) {
 				ni = h0 ? nd->idx : nd->idx + 1;
 				continue;
 			}
@@ -518,6 +561,15 @@ bool accel_occluded(const struct accel *a, const struct ray *r)
 }
 
 void accel_get_stats(const struct accel *a, struct accel_stats *st) { *st = a->st; }
+
+bool accel_bounds(const struct accel *a, vec3 *lo, vec3 *hi)
+{
+	if (!a->root || a->root->n_refs == 0)
+		return false;
+	*lo = a->root->bounds.lo;
+	*hi = a->root->bounds.hi;
+	return true;
+}
 
 /* ---- building ------------------------------------------------------------------------ */
 

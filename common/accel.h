@@ -48,6 +48,9 @@ struct accel_stats {
 int accel_build(const struct scene *s, struct accel **out, struct scene_error *err);
 void accel_free(struct accel *a);
 void accel_get_stats(const struct accel *a, struct accel_stats *st);
+/* Bounds of everything bounded in the scene (infinite planes left out);
+ * returns false when nothing is bounded. */
+bool accel_bounds(const struct accel *a, vec3 *lo, vec3 *hi);
 
 /* Closest hit in (r->tmin, r->tmax); fills *h and returns true if any. Thread-safe. */
 bool accel_intersect(const struct accel *a, const struct ray *r, struct hit *h);

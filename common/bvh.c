@@ -75,8 +75,8 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 		cb = geom_box_point(cb, B->cent[B->perm[i]]);
 	}
 	struct bvh_node *nd = &B->nodes[ni];
-	nd->b[0][0] = round_down(bb.lo.x), nd->b[0][1] = round_down(bb.lo.y), nd->b[0][2] = round_down(bb.lo.z);
-	nd->b[1][0] = round_up(bb.hi.x), nd->b[1][1] = round_up(bb.hi.y), nd->b[1][2] = round_up(bb.hi.z);
+	nd->b[0] = round_down(bb.lo.x), nd->b[1] = round_down(bb.lo.y), nd->b[2] = round_down(bb.lo.z);
+	nd->b[3] = round_up(bb.hi.x), nd->b[4] = round_up(bb.hi.y), nd->b[5] = round_up(bb.hi.z);
 	uint32_t n = end - begin;
 	if (n <= 1 || depth >= BVH_MAX_DEPTH - 1)
 		goto leaf;
@@ -119,8 +119,46 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 				best = c, best_axis = axis, best_bin = k;
 		}
 	}
+	/* Also try setting the big items apart (a floor under a sphereflake):
+	 * centroid bins cannot separate them when their centres sit among the
+	 * small ones. */
+	static const double big_frac[3] = { 0.5, 0.2, 0.05 };
+	int best_big = -1;
+	double node_area = box_area(bb);
+	for (int q = 0; q < 3; q++) {
+		struct geom_box b1 = geom_box_empty(), b2 = geom_box_empty();
+		uint32_t n1 = 0;
+		for (uint32_t i = begin; i < end; i++) {
+			const struct geom_box *ib = &B->boxes[B->perm[i]];
+			if (box_area(*ib) > big_frac[q] * node_area)
+				b1 = geom_box_union(b1, *ib), n1++;
+			else
+				b2 = geom_box_union(b2, *ib);
+		}
+		if (n1 == 0 || n1 == n)
+			continue;
+		double c = box_area(b1) * n1 + box_area(b2) * (n - n1);
+		if (c < best)
+			best = c, best_big = q;
+	}
 	uint32_t mid;
-	if (best_axis < 0) { /* every centroid in one place */
+	if (best_big >= 0) {
+		uint32_t i = begin, j = end;
+		while (i < j) {
+			if (box_area(B->boxes[B->perm[i]]) > big_frac[best_big] * node_area) {
+				i++;
+			} else {
+				j--;
+				uint32_t t = B->perm[i];
+				B->perm[i] = B->perm[j];
+				B->perm[j] = t;
+			}
+		}
+		mid = i;
+		double split_cost = BVH_COST_TRAV * node_area + BVH_COST_ISECT * best;
+		if (n <= B->max_leaf && BVH_COST_ISECT * node_area * n <= split_cost)
+			goto leaf;
+	} else if (best_axis < 0) { /* every centroid in one place */
 		if (n <= B->max_leaf)
 			goto leaf;
 		mid = begin + n / 2;

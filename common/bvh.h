@@ -20,7 +20,7 @@
  * perm[idx .. idx+n).
  */
 struct bvh_node {
-	float b[2][3]; /* b[0] = min corner, b[1] = max corner */
+	float b[6]; /* min corner x y z, then max corner x y z */
 	uint32_t idx, n;
 };
 

@@ -50,15 +50,20 @@ struct geom_box geom_box_empty(void)
 	return b;
 }
 
+static inline double mn(double a, double b) { return a < b ? a : b; }
+static inline double mx(double a, double b) { return a > b ? a : b; }
+
 struct geom_box geom_box_union(struct geom_box a, struct geom_box b)
 {
-	struct geom_box r = { v3_min(a.lo, b.lo), v3_max(a.hi, b.hi) };
+	struct geom_box r = { v3(mn(a.lo.x, b.lo.x), mn(a.lo.y, b.lo.y), mn(a.lo.z, b.lo.z)),
+			      v3(mx(a.hi.x, b.hi.x), mx(a.hi.y, b.hi.y), mx(a.hi.z, b.hi.z)) };
 	return r;
 }
 
 struct geom_box geom_box_point(struct geom_box a, vec3 p)
 {
-	struct geom_box r = { v3_min(a.lo, p), v3_max(a.hi, p) };
+	struct geom_box r = { v3(mn(a.lo.x, p.x), mn(a.lo.y, p.y), mn(a.lo.z, p.z)),
+			      v3(mx(a.hi.x, p.x), mx(a.hi.y, p.y), mx(a.hi.z, p.z)) };
 	return r;
 }
 

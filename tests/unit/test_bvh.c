@@ -1,0 +1,171 @@
+/*
+ * test_bvh.c - the BVH agrees with brute force: 100,000 random rays per scene
+ * (origins uniform in the scene's bounds, directions uniform on the sphere)
+ * over every SPD scene, spot, and the teapot when ../shared has it. Same hit
+ * or miss, t within 1e-9 relative, the same object (a different object is
+ * accepted only at an exact tie in t, and such ties are counted). Also the
+ * builder alone: every item lands in exactly one leaf, leaves cover their
+ * items' boxes, and degenerate inputs (equal centroids) build.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <pthread.h>
+#include <unistd.h>
+
+#include "common/accel.h"
+#include "common/bvh.h"
+#include "common/parse.h"
+#include "common/rng.h"
+#include "tests/unit/check.h"
+
+#define N_RAYS 100000
+
+static vec3 unit_dir(uint64_t seed, uint64_t k)
+{
+	double z = 2 * rng_uniform(seed, 2 * k) - 1, phi = 2 * M_PI * rng_uniform(seed, 2 * k + 1);
+	double r = sqrt(fmax(0, 1 - z * z));
+	return v3(r * cos(phi), r * sin(phi), z);
+}
+
+struct job {
+	const struct accel *a;
+	vec3 lo, hi;
+	uint64_t seed;
+	int from, to;
+	int mismatch, ties, hits;
+};
+
+/* Rays [from, to): BVH, brute force and occlusion compared. */
+static void *run_rays(void *arg)
+{
+	struct job *j = arg;
+	for (int k = j->from; k < j->to; k++) {
+		vec3 o = v3(j->lo.x + (j->hi.x - j->lo.x) * rng_uniform(j->seed, 3ull * k + 1000000),
+			    j->lo.y + (j->hi.y - j->lo.y) * rng_uniform(j->seed, 3ull * k + 1000001),
+			    j->lo.z + (j->hi.z - j->lo.z) * rng_uniform(j->seed, 3ull * k + 1000002));
+		struct ray r = { o, unit_dir(j->seed, (uint64_t)k), 0, INFINITY };
+		struct hit h1, h2;
+		bool b1 = accel_intersect(j->a, &r, &h1), b2 = accel_intersect_brute(j->a, &r, &h2);
+		bool occ = accel_occluded(j->a, &r);
+		j->hits += b1;
+		if (b1 != b2 || occ != b2) {
+			j->mismatch++;
+			continue;
+		}
+		if (!b1)
+			continue;
+		if (!(fabs(h1.t - h2.t) <= 1e-9 * fabs(h2.t))) {
+			j->mismatch++;
+			continue;
+		}
+		if (h1.object != h2.object) {
+			if (h1.t == h2.t)
+				j->ties++;
+			else
+				j->mismatch++;
+		}
+	}
+	return NULL;
+}
+
+static void agree(const char *path)
+{
+	struct scene *s;
+	struct scene_error err;
+	if (parse_files(NULL, path, &s, &err)) {
+		fprintf(stderr, "%s: %s\n", path, err.msg);
+		CHECK(!"scene parses");
+		return;
+	}
+	struct accel *a;
+	CHECK(accel_build(s, &a, &err) == 0);
+	struct job jobs[2];
+	memset(jobs, 0, sizeof jobs);
+	for (int i = 0; i < 2; i++) {
+		jobs[i].a = a;
+		CHECK(accel_bounds(a, &jobs[i].lo, &jobs[i].hi));
+		jobs[i].seed = rng_seed(7, 11, (uint32_t)strlen(path));
+		jobs[i].from = i * N_RAYS / 2;
+		jobs[i].to = (i + 1) * N_RAYS / 2;
+	}
+	pthread_t th;
+	bool threaded = pthread_create(&th, NULL, run_rays, &jobs[1]) == 0;
+	run_rays(&jobs[0]);
+	if (threaded)
+		pthread_join(th, NULL);
+	else
+		run_rays(&jobs[1]);
+	int mismatch = jobs[0].mismatch + jobs[1].mismatch, ties = jobs[0].ties + jobs[1].ties;
+	int hits = jobs[0].hits + jobs[1].hits;
+	printf("%s: %d rays, %d hits, %d mismatches, %d exact ties between objects\n", path, N_RAYS, hits,
+	       mismatch, ties);
+	CHECK(mismatch == 0);
+	CHECK(hits > N_RAYS / 10);
+	CHECK(ties < N_RAYS / 1000);
+	accel_free(a);
+	scene_free(s);
+}
+
+/* Builder invariants on random boxes and on boxes with one centroid. */
+static void builder(void)
+{
+	for (int trial = 0; trial < 2; trial++) {
+		uint32_t n = 5000;
+		struct geom_box *bx = malloc(n * sizeof *bx);
+		uint32_t *perm = malloc(n * sizeof *perm);
+		int *seen = calloc(n, sizeof *seen);
+		for (uint32_t i = 0; i < n; i++) {
+			vec3 c = trial ? v3(1, 2, 3)
+				       : v3(rng_uniform(1, 3 * i), rng_uniform(1, 3 * i + 1), rng_uniform(1, 3 * i + 2));
+			double e = 0.01 * (1 + rng_uniform(2, i));
+			bx[i].lo = v3_sub(c, v3(e, e, e));
+			bx[i].hi = v3_add(c, v3(e, e, e));
+		}
+		struct bvh b;
+		CHECK(bvh_build(&b, bx, n, perm, 4) == 0);
+		CHECK(b.n_nodes >= 1 && b.n_nodes <= 2 * n);
+		int bad = 0;
+		uint32_t covered = 0;
+		for (uint32_t ni = 0; ni < b.n_nodes; ni++) {
+			const struct bvh_node *nd = &b.nodes[ni];
+			if (!nd->n) {
+				bad += nd->idx + 1 >= b.n_nodes;
+				continue;
+			}
+			for (uint32_t k = nd->idx; k < nd->idx + nd->n; k++) {
+				uint32_t it = perm[k];
+				seen[it]++;
+				covered++;
+				bad += !(nd->b[0] <= bx[it].lo.x && nd->b[1] <= bx[it].lo.y && nd->b[2] <= bx[it].lo.z &&
+					 nd->b[3] >= bx[it].hi.x && nd->b[4] >= bx[it].hi.y && nd->b[5] >= bx[it].hi.z);
+			}
+		}
+		for (uint32_t i = 0; i < n; i++)
+			bad += seen[i] != 1;
+		CHECK(covered == n);
+		CHECK(bad == 0);
+		bvh_free(&b);
+		free(bx);
+		free(perm);
+		free(seen);
+	}
+}
+
+int main(void)
+{
+	builder();
+	static const char *const scenes[] = { "tests/data/spd/balls_s4.sce", "tests/data/spd/gears_s2.sce",
+					      "tests/data/spd/rings_s3.sce", "tests/data/spd/tetra_s4.sce",
+					      "tests/data/meshes/spot.sce" };
+	for (size_t i = 0; i < sizeof scenes / sizeof *scenes; i++)
+		agree(scenes[i]);
+	const char *shared = getenv("PORTRAY_SHARED");
+	char teapot[4096];
+	snprintf(teapot, sizeof teapot, "%s/meshes/teapot.sce", shared && *shared ? shared : "../shared/data");
+	if (access(teapot, R_OK) == 0)
+		agree(teapot);
+	else
+		printf("%s: not found, skipped\n", teapot);
+	TEST_MAIN_END();
+}
