@@ -74,8 +74,7 @@ struct xprim {
 
 struct ginst {
 	float inv[12]; /* parent -> define space, row-major 3x4 */
-	uint32_t group;
-	uint32_t obj;
+	uint32_t obj;  /* the instance object (its define gives the group) */
 };
 
 struct group {
@@ -230,7 +229,7 @@ static bool inst_hit(const struct accel *A, const struct ginst *in, const struct
 	struct trace lr;
 	trace_init(&lr, m34_point(&inv, r->o), m34_dir(&inv, r->d), r->tmin, r->tmax);
 	struct hit lh;
-	if (!group_hit(A, A->dgroup[in->group], &lr, &lh, brute))
+	if (!group_hit(A, A->dgroup[A->s->objects[in->obj].u.instance.define], &lr, &lh, brute))
 		return false;
 	h->t = lh.t;
 	h->n = v3_norm(m34_normal(&inv, lh.n));
@@ -255,7 +254,7 @@ static bool inst_occluded(const struct accel *A, const struct ginst *in, const s
 	inst_matrix(in, &inv);
 	struct trace lr;
 	trace_init(&lr, m34_point(&inv, r->o), m34_dir(&inv, r->d), r->tmin, r->tmax);
-	return group_occluded(A, A->dgroup[in->group], &lr);
+	return group_occluded(A, A->dgroup[A->s->objects[in->obj].u.instance.define], &lr);
 }
 
 /* Tests one reference; on a hit closer than r->tmax records it in *c and
@@ -837,7 +836,6 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			if (sub->n_refs == 0 && sub->n_unb == 0)
 				continue; /* an empty define draws nothing */
 			struct ginst *gi = &g->inst[g->n_inst];
-			gi->group = o->u.instance.define;
 			gi->obj = oi;
 			mat34 inv = m34_identity(), rinv, fwd;
 			if (o->has_xform && !m34_invert(&o->xform, &inv))
@@ -877,6 +875,9 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	}
 	g->n_unb = n_unb;
 	g->n_refs = n_bounded;
+	uint32_t *unb_fit = realloc(g->unb, (n_unb ? n_unb : 1) * sizeof *unb_fit);
+	if (unb_fit)
+		g->unb = unb_fit;
 	A->st.n_prims += g->n_sph + g->n_tri + g->n_xp;
 
 	/* pass 3: the BVH over the bounded references */
@@ -986,6 +987,7 @@ int accel_build(const struct scene *s, struct accel **out, struct scene_error *e
 		return scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
 	}
 	A->st.bytes = sizeof *A + ((size_t)s->n_objects + s->n_defines) * sizeof(void *);
+	A->st.instance_bytes = sizeof(struct ginst);
 	A->root = build_group(A, s->roots, s->n_roots, err);
 	if (!A->root) {
 		accel_free(A);

@@ -42,6 +42,7 @@ struct accel_stats {
 	uint64_t n_prims;        /* leaf primitives built (triangles count one each) */
 	uint64_t n_instances;    /* instance references */
 	uint64_t n_nodes;        /* BVH nodes over all levels */
+	size_t instance_bytes;   /* size of one instance reference record */
 };
 
 /* Builds the acceleration for the scene's roots. Returns 0 or an error level. */
