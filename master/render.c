@@ -18,9 +18,6 @@
 #include "master/master.h"
 #include "master/progress.h"
 
-/* Until master/farm.c lands the farm is optional at link time. */
-#pragma weak farm_render
-
 /* Room for the filter warnings of a camera (LIM_FILTERS lines). */
 #define WARN_BUF 4096
 
@@ -109,11 +106,6 @@ int master_render(const struct master_opts *o)
 	uint64_t total = render_tile_count(w, h, o->tile), finished = 0;
 	int threads = o->threads > 0 ? o->threads : render_ncpus();
 	bool farm = o->workers || o->workers_file;
-	if (farm && !farm_render) {
-		fprintf(stderr, "portray-master: this build has no farm support yet\n");
-		rc = EXIT_USAGE;
-		goto done;
-	}
 	if (farm) {
 		rc = farm_render(o, s, r, w, h, image, &cancel);
 		if (rc && !atomic_load(&cancel))
