@@ -36,6 +36,10 @@
 #include <string.h>
 #include <time.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "common/bvh.h"
 #include "common/geom.h"
 
@@ -136,39 +140,96 @@ static void trace_init(struct trace *r, vec3 o, vec3 d, double tmin, double tmax
 	r->tmax = tmax;
 }
 
-/* The ray as the slab test wants it: kept in locals during a traversal. */
+/*
+ * The ray as the slab tests want it. Both children of a pair are tested at
+ * once with 2-wide double SIMD where SSE2 exists, else with the same
+ * arithmetic one child at a time: the results are identical.
+ */
 struct slab_ray {
-	double ox, oy, oz, ix, iy, iz;
-	int nx, ny, nz, fx, fy, fz; /* indices of the near and far planes in bvh_node.b */
+#if defined(__SSE2__)
+	__m128d o[3], inv[3];
+#else
+	double o[3], inv[3];
+#endif
+	int near[3], far[3]; /* which row of bvh_pair.b is the near/far plane per axis */
 };
 
-static inline struct slab_ray slab_ray_of(const struct trace *r)
+static inline void slab_init(struct slab_ray *q, const struct trace *r)
 {
-	struct slab_ray q = { r->o.x, r->o.y, r->o.z, r->inv[0], r->inv[1], r->inv[2],
-			      3 * r->sgn[0], 1 + 3 * r->sgn[1], 2 + 3 * r->sgn[2],
-			      3 - 3 * r->sgn[0], 4 - 3 * r->sgn[1], 5 - 3 * r->sgn[2] };
-	return q;
+	double o[3] = { r->o.x, r->o.y, r->o.z };
+	for (int k = 0; k < 3; k++) {
+#if defined(__SSE2__)
+		q->o[k] = _mm_set1_pd(o[k]);
+		q->inv[k] = _mm_set1_pd(r->inv[k]);
+#else
+		q->o[k] = o[k];
+		q->inv[k] = r->inv[k];
+#endif
+		q->near[k] = k + 3 * r->sgn[k];
+		q->far[k] = k + 3 - 3 * r->sgn[k];
+	}
 }
 
-/* Robust slab test (Ize 2013): exact float bounds, double arithmetic, and
- * the far distance widened by 2 gamma(3) to cover the rounding. */
-static inline bool node_hit(const struct bvh_node *nd, const struct slab_ray *q, double tmin, double tmax,
-			    double *tnear)
+/* 1 + 2 gamma(3) for doubles, rounded up: widens the far distance (Ize 2013) */
+#define SLAB_WIDEN 4.5e-16
+
+/*
+ * Robust slab test of both children of p (exact float bounds, double
+ * arithmetic, far distance widened by 2 gamma(3)); returns a mask (bit c:
+ * child c is hit in [tmin, tmax]) and the entry distances in tn.
+ */
+static inline int pair_hit(const struct bvh_pair *p, const struct slab_ray *q, double tmin, double tmax, double tn[2])
 {
-	double tx0 = ((double)nd->b[q->nx] - q->ox) * q->ix;
-	double tx1 = ((double)nd->b[q->fx] - q->ox) * q->ix;
-	double ty0 = ((double)nd->b[q->ny] - q->oy) * q->iy;
-	double ty1 = ((double)nd->b[q->fy] - q->oy) * q->iy;
-	double tz0 = ((double)nd->b[q->nz] - q->oz) * q->iz;
-	double tz1 = ((double)nd->b[q->fz] - q->oz) * q->iz;
-	double t0 = tx0 > tmin ? tx0 : tmin;
-	t0 = ty0 > t0 ? ty0 : t0;
-	t0 = tz0 > t0 ? tz0 : t0;
-	double t1 = tx1 < tmax ? tx1 : tmax;
-	t1 = ty1 < t1 ? ty1 : t1;
-	t1 = tz1 < t1 ? tz1 : t1;
-	t1 += fabs(t1) * 4.5e-16; /* 1 + 2 gamma(3) for doubles, rounded up */
-	*tnear = t0;
+#if defined(__SSE2__)
+#define PAIR_LOAD(row) _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)p->b[row])))
+#define PAIR_AXIS(k)                                                                           \
+	do {                                                                                   \
+		__m128d ta = _mm_mul_pd(_mm_sub_pd(PAIR_LOAD(k), q->o[k]), q->inv[k]);        \
+		__m128d tb = _mm_mul_pd(_mm_sub_pd(PAIR_LOAD(k + 3), q->o[k]), q->inv[k]);    \
+		t0 = _mm_max_pd(_mm_min_pd(ta, tb), t0);                                      \
+		t1 = _mm_min_pd(_mm_max_pd(ta, tb), t1);                                      \
+	} while (0)
+	__m128d t0 = _mm_set1_pd(tmin), t1 = _mm_set1_pd(tmax);
+	PAIR_AXIS(0);
+	PAIR_AXIS(1);
+	PAIR_AXIS(2);
+#undef PAIR_AXIS
+#undef PAIR_LOAD
+	const __m128d absmask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+	t1 = _mm_add_pd(t1, _mm_mul_pd(_mm_and_pd(t1, absmask), _mm_set1_pd(SLAB_WIDEN)));
+	_mm_storeu_pd(tn, t0);
+	return _mm_movemask_pd(_mm_cmple_pd(t0, t1));
+#else
+	int mask = 0;
+	for (int c = 0; c < 2; c++) {
+		double t0 = tmin, t1 = tmax;
+		for (int k = 0; k < 3; k++) {
+			double a = ((double)p->b[k][c] - q->o[k]) * q->inv[k];
+			double b = ((double)p->b[k + 3][c] - q->o[k]) * q->inv[k];
+			double lo = a < b ? a : b, hi = a < b ? b : a;
+			t0 = lo > t0 ? lo : t0;
+			t1 = hi < t1 ? hi : t1;
+		}
+		t1 += fabs(t1) * SLAB_WIDEN;
+		tn[c] = t0;
+		mask |= (t0 <= t1) << c;
+	}
+	return mask;
+#endif
+}
+
+/* The same test on one box of six floats (the root's). */
+static bool box_hit(const float b[6], const struct trace *r)
+{
+	double o[3] = { r->o.x, r->o.y, r->o.z };
+	double t0 = r->tmin, t1 = r->tmax;
+	for (int k = 0; k < 3; k++) {
+		double a = ((double)b[k + 3 * r->sgn[k]] - o[k]) * r->inv[k];
+		double c = ((double)b[k + 3 - 3 * r->sgn[k]] - o[k]) * r->inv[k];
+		t0 = a > t0 ? a : t0;
+		t1 = c < t1 ? c : t1;
+	}
+	t1 += fabs(t1) * SLAB_WIDEN;
 	return t0 <= t1;
 }
 
@@ -257,6 +318,45 @@ static bool inst_occluded(const struct accel *A, const struct ginst *in, const s
 	return group_occluded(A, A->dgroup[A->s->objects[in->obj].u.instance.define], &lr);
 }
 
+/* The rarer kinds (xprims, CSG, instances), kept out of the traversal loop
+ * so the loop keeps the ray in registers. Same contract as ref_test. */
+static __attribute__((noinline)) bool ref_test_slow(const struct accel *A, const struct group *g, uint32_t ref,
+						     struct trace *r, struct cand *c, bool brute)
+{
+	uint32_t i = REF_IDX(ref);
+	double t;
+	if (REF_KIND(ref) == REF_XPRIM) {
+		const struct xprim *x = &g->xp[i];
+		if (x->g->kind == PRIM_CSG) {
+			struct hit hh;
+			if (!csg_hit(A->s, (struct geom_obj *const *)A->gobj, x->obj, r->o, r->d, r->tmin, r->tmax, &hh))
+				return false;
+			t = hh.t;
+			c->sub = hh;
+		} else {
+			vec3 o = r->o, d = r->d;
+			if (x->g->has_xform) {
+				o = m34_point(&x->g->inv, o);
+				d = m34_dir(&x->g->inv, d);
+			}
+			int part;
+			if (!geom_intersect(x->g, o, d, r->tmin, r->tmax, &t, &part))
+				return false;
+			c->part = part;
+		}
+	} else {
+		struct hit hh;
+		if (!inst_hit(A, &g->inst[i], r, &hh, brute))
+			return false;
+		t = hh.t;
+		c->sub = hh;
+	}
+	c->ref = ref;
+	c->t = t;
+	r->tmax = t;
+	return true;
+}
+
 /* Tests one reference; on a hit closer than r->tmax records it in *c and
  * shrinks r->tmax. */
 static inline bool ref_test(const struct accel *A, const struct group *g, uint32_t ref, struct trace *r,
@@ -279,35 +379,8 @@ static inline bool ref_test(const struct accel *A, const struct group *g, uint32
 		c->b2 = b2;
 		break;
 	}
-	case REF_XPRIM: {
-		const struct xprim *x = &g->xp[i];
-		if (x->g->kind == PRIM_CSG) {
-			struct hit hh;
-			if (!csg_hit(A->s, (struct geom_obj *const *)A->gobj, x->obj, r->o, r->d, r->tmin, r->tmax, &hh))
-				return false;
-			t = hh.t;
-			c->sub = hh;
-			break;
-		}
-		vec3 o = r->o, d = r->d;
-		if (x->g->has_xform) {
-			o = m34_point(&x->g->inv, o);
-			d = m34_dir(&x->g->inv, d);
-		}
-		int part;
-		if (!geom_intersect(x->g, o, d, r->tmin, r->tmax, &t, &part))
-			return false;
-		c->part = part;
-		break;
-	}
-	default: {
-		struct hit hh;
-		if (!inst_hit(A, &g->inst[i], r, &hh, brute))
-			return false;
-		t = hh.t;
-		c->sub = hh;
-		break;
-	}
+	default:
+		return ref_test_slow(A, g, ref, r, c, brute);
 	}
 	c->ref = ref;
 	c->t = t;
@@ -428,41 +501,40 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 		for (uint32_t k = 0; k < g->n_refs; k++)
 			if (REF_KIND(g->refs[k]) >= REF_XPRIM)
 				found |= ref_test(A, g, g->refs[k], r, &best, true);
-	} else if (g->bvh.n_nodes) {
-		const struct bvh_node *nodes = g->bvh.nodes;
-		const struct slab_ray q = slab_ray_of(r);
+	} else if (g->bvh.n_nodes && box_hit(g->bvh.root_b, r)) {
+		const struct bvh_pair *pairs = g->bvh.pairs;
+		struct slab_ray q;
+		slab_init(&q, r);
 		const double tmin = r->tmin;
 		double tmax = r->tmax;
-		uint32_t stack[BVH_MAX_DEPTH + 1];
-		double stack_t[BVH_MAX_DEPTH + 1];
+		struct {
+			uint32_t idx, n;
+			double t;
+		} stack[BVH_MAX_DEPTH + 1];
 		int sp = 0;
-		double tn;
-		uint32_t ni = 0;
-		if (!node_hit(&nodes[0], &q, tmin, tmax, &tn))
-			goto done;
+		uint32_t idx = g->bvh.root_idx, n = g->bvh.root_n;
 		for (;;) {
-			const struct bvh_node *nd = &nodes[ni];
-			if (nd->n) {
-				for (uint32_t k = 0; k < nd->n; k++)
-					found |= ref_test(A, g, g->refs[nd->idx + k], r, &best, false);
+			if (n) {
+				for (uint32_t k = 0; k < n; k++)
+					found |= ref_test(A, g, g->refs[idx + k], r, &best, false);
 				tmax = r->tmax;
 			} else {
-				double t0, t1;
-				bool h0 = node_hit(&nodes[nd->idx], &q, tmin, tmax, &t0);
-				bool h1 = node_hit(&nodes[nd->idx + 1], &q, tmin, tmax, &t1);
-				if (h0 && h1) {
-					uint32_t near = nd->idx, far = nd->idx + 1;
-					if (t1 < t0) {
-						near = far, far = nd->idx;
-						t1 = t0;
-					}
-					stack[sp] = far;
-					stack_t[sp++] = t1;
-					ni = near;
+				const struct bvh_pair *p = &pairs[idx];
+				double tn[2];
+				int m = pair_hit(p, &q, tmin, tmax, tn);
+				if (m == 3) {
+					int near = tn[1] < tn[0], far = 1 - near;
+					stack[sp].idx = p->idx[far];
+					stack[sp].n = p->n[far];
+					stack[sp++].t = tn[far];
+					idx = p->idx[near];
+					n = p->n[near];
 					continue;
 				}
-				if (h0 | h1) {
-					ni = h0 ? nd->idx : nd->idx + 1;
+				if (m) {
+					int c = m >> 1;
+					idx = p->idx[c];
+					n = p->n[c];
 					continue;
 				}
 			}
@@ -471,10 +543,11 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 				if (sp == 0)
 					goto done;
 				sp--;
-				if (stack_t[sp] <= tmax)
+				if (stack[sp].t <= tmax)
 					break;
 			}
-			ni = stack[sp];
+			idx = stack[sp].idx;
+			n = stack[sp].n;
 		}
 	}
 done:
@@ -488,39 +561,44 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 	for (uint32_t k = 0; k < g->n_unb; k++)
 		if (ref_occludes(A, g, g->unb[k], r))
 			return true;
-	if (!g->bvh.n_nodes)
+	if (!g->bvh.n_nodes || !box_hit(g->bvh.root_b, r))
 		return false;
-	const struct bvh_node *nodes = g->bvh.nodes;
-	const struct slab_ray q = slab_ray_of(r);
-	uint32_t stack[BVH_MAX_DEPTH + 1];
+	const struct bvh_pair *pairs = g->bvh.pairs;
+	struct slab_ray q;
+	slab_init(&q, r);
+	struct {
+		uint32_t idx, n;
+	} stack[BVH_MAX_DEPTH + 1];
 	int sp = 0;
-	double tn;
-	uint32_t ni = 0;
-	if (!node_hit(&nodes[0], &q, r->tmin, r->tmax, &tn))
-		return false;
+	uint32_t idx = g->bvh.root_idx, n = g->bvh.root_n;
 	for (;;) {
-		const struct bvh_node *nd = &nodes[ni];
-		if (nd->n) {
-			for (uint32_t k = 0; k < nd->n; k++)
-				if (ref_occludes(A, g, g->refs[nd->idx + k], r))
+		if (n) {
+			for (uint32_t k = 0; k < n; k++)
+				if (ref_occludes(A, g, g->refs[idx + k], r))
 					return true;
 		} else {
-			double t0, t1;
-			bool h0 = node_hit(&nodes[nd->idx], &q, r->tmin, r->tmax, &t0);
-			bool h1 = node_hit(&nodes[nd->idx + 1], &q, r->tmin, r->tmax, &t1);
-			if (h0 && h1) {
-				stack[sp++] = nd->idx + 1;
-				ni = nd->idx;
+			const struct bvh_pair *p = &pairs[idx];
+			double tn[2];
+			int m = pair_hit(p, &q, r->tmin, r->tmax, tn);
+			if (m == 3) {
+				stack[sp].idx = p->idx[1];
+				stack[sp++].n = p->n[1];
+				idx = p->idx[0];
+				n = p->n[0];
 				continue;
 			}
-			if (h0 | h1) {
-				ni = h0 ? nd->idx : nd->idx + 1;
+			if (m) {
+				int c = m >> 1;
+				idx = p->idx[c];
+				n = p->n[c];
 				continue;
 			}
 		}
 		if (sp == 0)
 			return false;
-		ni = stack[--sp];
+		sp--;
+		idx = stack[sp].idx;
+		n = stack[sp].n;
 	}
 }
 
@@ -892,7 +970,7 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 		g->refs[k] = all[perm[k]];
 		g->bounds = geom_box_union(g->bounds, boxes[k]);
 	}
-	g->bytes += (size_t)g->bvh.n_nodes * sizeof(struct bvh_node) + (size_t)(n_bounded + n_unb) * sizeof(uint32_t);
+	g->bytes += (size_t)g->bvh.n_pairs * sizeof(struct bvh_pair) + (size_t)(n_bounded + n_unb) * sizeof(uint32_t);
 	A->st.n_nodes += g->bvh.n_nodes;
 	A->st.bytes += g->bytes;
 	free(perm);

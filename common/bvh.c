@@ -185,6 +185,28 @@ leaf:
 	nd->n = n;
 }
 
+/* Copies node ni's interior into pair pi; children's pairs follow in DFS order. */
+static void to_pairs(const struct bvh_node *nodes, uint32_t ni, struct bvh_pair *pairs, uint32_t pi, uint32_t *next)
+{
+	const struct bvh_node *nd = &nodes[ni];
+	struct bvh_pair *p = &pairs[pi];
+	for (int c = 0; c < 2; c++) {
+		const struct bvh_node *ch = &nodes[nd->idx + c];
+		for (int k = 0; k < 6; k++)
+			p->b[k][c] = ch->b[k];
+		if (ch->n) {
+			p->idx[c] = ch->idx;
+			p->n[c] = ch->n;
+		} else {
+			uint32_t cp = (*next)++;
+			p->idx[c] = cp;
+			p->n[c] = 0;
+			to_pairs(nodes, nd->idx + c, pairs, cp, next);
+			p = &pairs[pi];
+		}
+	}
+}
+
 int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf)
 {
 	memset(b, 0, sizeof *b);
@@ -204,9 +226,22 @@ int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t 
 	}
 	build_node(&B, 0, 0, n, 0);
 	free(B.cent);
-	struct bvh_node *shrunk = realloc(B.nodes, (size_t)B.n_nodes * sizeof *B.nodes);
-	b->nodes = shrunk ? shrunk : B.nodes;
 	b->n_nodes = B.n_nodes;
+	memcpy(b->root_b, B.nodes[0].b, sizeof b->root_b);
+	b->root_idx = B.nodes[0].idx;
+	b->root_n = B.nodes[0].n;
+	if (!b->root_n) {
+		b->n_pairs = (B.n_nodes - 1) / 2;
+		b->pairs = malloc((size_t)b->n_pairs * sizeof *b->pairs);
+		if (!b->pairs) {
+			free(B.nodes);
+			return -1;
+		}
+		uint32_t next = 1;
+		to_pairs(B.nodes, 0, b->pairs, 0, &next);
+		b->root_idx = 0;
+	}
+	free(B.nodes);
 	return 0;
 }
 
@@ -214,7 +249,6 @@ void bvh_free(struct bvh *b)
 {
 	if (!b)
 		return;
-	free(b->nodes);
-	b->nodes = NULL;
-	b->n_nodes = 0;
+	free(b->pairs);
+	memset(b, 0, sizeof *b);
 }

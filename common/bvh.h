@@ -14,26 +14,42 @@
 #define BVH_MAX_DEPTH 64
 
 /*
- * One node: float bounds rounded outward from the double boxes, so a box test
- * in double on them never culls a true hit. n == 0: interior, children are
- * nodes idx and idx+1 (adjacent: one cache line); n > 0: leaf of items
- * perm[idx .. idx+n).
+ * The builder's node: float bounds rounded outward from the double boxes, so
+ * a box test in double on them never culls a true hit. n == 0: interior,
+ * children are nodes idx and idx+1; n > 0: leaf of items perm[idx .. idx+n).
  */
 struct bvh_node {
 	float b[6]; /* min corner x y z, then max corner x y z */
 	uint32_t idx, n;
 };
 
+/*
+ * What traversal reads: one record per interior node holding BOTH children's
+ * bounds side by side (b[k][c]: k = min x, min y, min z, max x, max y, max z;
+ * c = child), so one 2-wide double SIMD slab test covers both children and a
+ * step of the traversal touches one 64-byte line.
+ * Child c: n[c] == 0: interior, idx[c] is its pair; else a leaf of items
+ * perm[idx[c] .. idx[c]+n[c]).
+ */
+struct bvh_pair {
+	float b[6][2];
+	uint32_t idx[2];
+	uint32_t n[2];
+};
+
 struct bvh {
-	struct bvh_node *nodes; /* owned */
-	uint32_t n_nodes;
+	struct bvh_pair *pairs; /* owned; pair 0 holds the root's children */
+	uint32_t n_pairs;
+	float root_b[6];        /* the root's bounds */
+	uint32_t root_idx, root_n; /* root_n > 0: the root is a leaf; else pair 0 */
+	uint32_t n_nodes;       /* nodes the builder made (for statistics) */
 };
 
 /*
  * Builds over n items with finite boxes. perm (n entries, caller-owned) gets
  * the items in leaf order. max_leaf bounds the items of a leaf unless the
- * depth limit or identical centroids force more. n == 0 gives no nodes.
- * Returns 0, or -1 when out of memory.
+ * depth limit or identical centroids force more. n == 0 gives an empty tree
+ * (n_nodes == 0). Returns 0, or -1 when out of memory.
  */
 int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf);
 void bvh_free(struct bvh *b);

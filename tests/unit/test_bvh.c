@@ -125,26 +125,35 @@ static void builder(void)
 		struct bvh b;
 		CHECK(bvh_build(&b, bx, n, perm, 4) == 0);
 		CHECK(b.n_nodes >= 1 && b.n_nodes <= 2 * n);
+		CHECK(b.root_n == 0 && b.n_pairs == (b.n_nodes - 1) / 2);
 		int bad = 0;
 		uint32_t covered = 0;
-		for (uint32_t ni = 0; ni < b.n_nodes; ni++) {
-			const struct bvh_node *nd = &b.nodes[ni];
-			if (!nd->n) {
-				bad += nd->idx + 1 >= b.n_nodes;
-				continue;
-			}
-			for (uint32_t k = nd->idx; k < nd->idx + nd->n; k++) {
-				uint32_t it = perm[k];
-				seen[it]++;
-				covered++;
-				bad += !(nd->b[0] <= bx[it].lo.x && nd->b[1] <= bx[it].lo.y && nd->b[2] <= bx[it].lo.z &&
-					 nd->b[3] >= bx[it].hi.x && nd->b[4] >= bx[it].hi.y && nd->b[5] >= bx[it].hi.z);
+		for (uint32_t pi = 0; pi < b.n_pairs; pi++) {
+			const struct bvh_pair *p = &b.pairs[pi];
+			for (int c = 0; c < 2; c++) {
+				if (!p->n[c]) {
+					bad += p->idx[c] <= pi || p->idx[c] >= b.n_pairs; /* children after parents */
+					continue;
+				}
+				for (uint32_t k = p->idx[c]; k < p->idx[c] + p->n[c]; k++) {
+					uint32_t it = perm[k];
+					seen[it]++;
+					covered++;
+					bad += !(p->b[0][c] <= bx[it].lo.x && p->b[1][c] <= bx[it].lo.y &&
+						 p->b[2][c] <= bx[it].lo.z && p->b[3][c] >= bx[it].hi.x &&
+						 p->b[4][c] >= bx[it].hi.y && p->b[5][c] >= bx[it].hi.z);
+				}
 			}
 		}
 		for (uint32_t i = 0; i < n; i++)
 			bad += seen[i] != 1;
 		CHECK(covered == n);
 		CHECK(bad == 0);
+		/* a single item: the root is a leaf */
+		struct bvh b1;
+		CHECK(bvh_build(&b1, bx, 1, perm, 4) == 0);
+		CHECK(b1.n_pairs == 0 && b1.root_n == 1 && b1.root_idx == 0);
+		bvh_free(&b1);
 		bvh_free(&b);
 		free(bx);
 		free(perm);
