@@ -7,6 +7,7 @@
  * 1280x960 on all threads, and the scene's peak RSS (each scene runs in its
  * own process, so getrusage's maximum belongs to it alone).
  * Target (issue 3): >= 10 Mrays/s per core on balls_s4 primary rays.
+ * BENCH_ONLY=balls_s4,teapot limits the run to the scenes named.
  */
 #include <pthread.h>
 #include <stdatomic.h>
@@ -155,9 +156,13 @@ static int bench_scene(const char *name, const char *path)
 	return 0;
 }
 
-/* Runs bench_scene in a child process so peak RSS is per scene. */
+/* Runs bench_scene in a child process so peak RSS is per scene. Only the
+ * scenes named in $BENCH_ONLY (comma-separated substring match) if set. */
 static void run(const char *name, const char *path)
 {
+	const char *only = getenv("BENCH_ONLY");
+	if (only && *only && !strstr(only, name))
+		return;
 	struct stat sb;
 	if (stat(path, &sb) != 0) {
 		printf("%-9s skipped: %s not found (set PORTRAY_SHARED)\n", name, path);

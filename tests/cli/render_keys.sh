@@ -21,16 +21,16 @@ on_tty() {
 	(sleep "$2"; printf "$1"; sleep 1) | script -qec "$4" /dev/null >"$3" 2>&1
 }
 
-slow_scene "$TMP/slow.sce" 400
+slow_scene "$TMP/slow.sce" 600
 for key in q '\033'; do
 	rm -f "$TMP/k.ppm"
 	on_tty "$key" 1 "$TMP/log" "'$MASTER' '$TMP/slow.sce' -o '$TMP/k.ppm' -j 1 --tile 20; echo rc=\$?; stty -a"
 	tr -d '\r' <"$TMP/log" >"$TMP/log2"
-	grep -Eq 'stopped: [0-9]+ of 400 tiles \([0-9]+%\) written to' "$TMP/log2" ||
+	grep -Eq 'stopped: [0-9]+ of 900 tiles \([0-9]+%\) written to' "$TMP/log2" ||
 		fail "key '$key': no 'stopped' message: $(tail -c 300 "$TMP/log2")"
 	grep -q '^rc=0$' "$TMP/log2" || fail "key '$key': exit status not 0"
-	ppm_check "$TMP/k.ppm" 400 400
-	[ "$(ppm_pixel "$TMP/k.ppm" 400 399 399)" = "0 0 0" ] || fail "key '$key': unfinished pixel not black"
+	ppm_check "$TMP/k.ppm" 600 600
+	[ "$(ppm_pixel "$TMP/k.ppm" 600 599 599)" = "0 0 0" ] || fail "key '$key': unfinished pixel not black"
 	# terminal restored: canonical mode and echo
 	grep -q -- '-icanon' "$TMP/log2" && fail "key '$key': terminal left non-canonical"
 	grep -Eq '(^| )icanon' "$TMP/log2" || fail "key '$key': no stty output"

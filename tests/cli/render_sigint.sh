@@ -7,7 +7,7 @@
 cat >"$TMP/slow.sce" <<'SCE'
 camera look-from (0 5 0.01) look-at (0 0 0) drop-line (0 0 1) depth 1 x-size 1 y-size 1
   filter standard ; filter super-sample x-samples 8 y-samples 8 ; ;
-image xsize 400 ysize 400 ;
+image xsize 600 ysize 600 ;
 light position (0 4 0) shape sphere centre (0 4 0) radius 0.5 ; samples 4 ;
 object plane position (0 -1 0) normal (0 1 0) ; ;
 SCE
@@ -19,16 +19,16 @@ kill -INT "$pid" || fail "render finished before SIGINT: machine too fast for th
 wait "$pid"
 rc=$?
 [ "$rc" -eq 130 ] || fail "exit $rc after SIGINT, want 130: $(cat "$TMP/err")"
-ppm_check "$TMP/part.ppm" 400 400
+ppm_check "$TMP/part.ppm" 600 600
 msg=$(grep 'interrupted:' "$TMP/err") || fail "no 'interrupted:' message: $(cat "$TMP/err")"
-echo "$msg" | grep -Eq 'interrupted: [0-9]+ of 400 tiles \([0-9]+%\) written to .*part.ppm$' ||
+echo "$msg" | grep -Eq 'interrupted: [0-9]+ of 900 tiles \([0-9]+%\) written to .*part.ppm$' ||
 	fail "message: $msg"
 done_tiles=$(echo "$msg" | sed 's/.*interrupted: \([0-9]*\) of.*/\1/')
-[ "$done_tiles" -lt 400 ] || fail "all tiles done: not an interrupted render"
+[ "$done_tiles" -lt 900 ] || fail "all tiles done: not an interrupted render"
 # the last tile is unfinished: black; a finished tile (if any) is lit
-[ "$(ppm_pixel "$TMP/part.ppm" 400 399 399)" = "0 0 0" ] || fail "unfinished pixel not black"
+[ "$(ppm_pixel "$TMP/part.ppm" 600 599 599)" = "0 0 0" ] || fail "unfinished pixel not black"
 if [ "$done_tiles" -gt 0 ]; then
-	[ "$(ppm_pixel "$TMP/part.ppm" 400 5 5)" != "0 0 0" ] || fail "finished pixel is black"
+	[ "$(ppm_pixel "$TMP/part.ppm" 600 5 5)" != "0 0 0" ] || fail "finished pixel is black"
 fi
 # no temporary file left behind
 [ "$(ls "$TMP" | grep -c part)" -eq 1 ] || fail "leftover files: $(ls "$TMP")"
