@@ -129,10 +129,22 @@ static vec3 light_point(const struct shade_light *L, int k, int n, double r1, do
 		return v3_add(l->sphere.centre, v3_scale(d, l->sphere.radius));
 	}
 	case LIGHT_CYLINDER: {
-		double phi = 2 * M_PI * u2;
+		double phi = 2 * M_PI * u2, r = l->cylinder.radius;
 		vec3 axis = v3_sub(l->cylinder.to, l->cylinder.from);
 		vec3 rad = v3_add(v3_scale(L->e1, cos(phi)), v3_scale(L->e2, sin(phi)));
-		return v3_add(v3_add(l->cylinder.from, v3_scale(axis, u1)), v3_scale(rad, l->cylinder.radius));
+		if (l->cylinder.capped) { /* u1 picks side or a cap by area */
+			double side = 2 * M_PI * r * v3_len(axis), cap = M_PI * r * r;
+			double t = u1 * (side + 2 * cap);
+			if (t >= side) {
+				t -= side;
+				int top = t >= cap;
+				double f = (t - (top ? cap : 0)) / cap; /* in [0,1): radius^2 fraction */
+				vec3 c = top ? l->cylinder.to : l->cylinder.from;
+				return v3_add(c, v3_scale(rad, r * sqrt(fmin(f, 1.0))));
+			}
+			u1 = t / side;
+		}
+		return v3_add(v3_add(l->cylinder.from, v3_scale(axis, u1)), v3_scale(rad, r));
 	}
 	case LIGHT_BOX: {
 		if (!(L->total_area > 0))

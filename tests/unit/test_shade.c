@@ -452,6 +452,22 @@ static void test_shaped_lights(void)
 		expect += 10 / sqrt(100 + x * x) / 10000;
 	}
 	CHECK(fabs(cc.x - expect) < 0.01);
+	/* a capped cylinder light also samples its end discs (by area): a short,
+	 * wide one is nearly a disc, whose samples lie nearer the axis */
+	s->lights[0].cylinder.from = v3(0, 0, 10);
+	s->lights[0].cylinder.to = v3(0, 0, 10.001);
+	s->lights[0].cylinder.radius = 2;
+	s->lights[0].samples = 64;
+	vec3 side_only = shoot(s, v3(0, 0, 3), v3(0, 0, -1), 3);
+	CHECK_NEAR(side_only.x, 10 / sqrt(104), 1e-3);
+	s->lights[0].cylinder.capped = true;
+	vec3 with_caps = shoot(s, v3(0, 0, 3), v3(0, 0, -1), 3);
+	CHECK(with_caps.x > 0.986 && with_caps.x < 0.9925); /* disc mean ~ 1 - E[r^2]/200 = 0.99 */
+	s->lights[0].cylinder.from = v3(-5, 0, 10);
+	s->lights[0].cylinder.to = v3(5, 0, 10);
+	s->lights[0].cylinder.radius = 0.5;
+	s->lights[0].cylinder.capped = false;
+	s->lights[0].samples = 25;
 	/* light fall-off with a shape: every sample attenuated */
 	s->lights[0].fall_off = 1;
 	vec3 cf = shoot(s, v3(0, 0, 3), v3(0, 0, -1), 3);
