@@ -99,8 +99,14 @@ void shade_ctx_free(struct shade_ctx *c)
 	free(c);
 }
 
-static double maxc(vec3 a) { return fmax(a.x, fmax(a.y, a.z)); }
-static double maxabs(vec3 a) { return fmax(fabs(a.x), fmax(fabs(a.y), fabs(a.z))); }
+/* Largest channel (plain comparisons: fmax is a library call at -O2). */
+static inline double max3(double a, double b, double c)
+{
+	double m = a > b ? a : b;
+	return m > c ? m : c;
+}
+static double maxc(vec3 a) { return max3(a.x, a.y, a.z); }
+static double maxabs(vec3 a) { return max3(fabs(a.x), fabs(a.y), fabs(a.z)); }
 
 static double frac(double x) { return x - floor(x); }
 
