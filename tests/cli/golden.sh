@@ -76,5 +76,10 @@ exact noreflect image no-reflections == every reflection 0
 same invisible a fully transparent sphere (ior 1, no diffuse, no highlight) is invisible
 exact samechq chequers of one material == that material
 exact turbplain turb3d over a plain material changes nothing
+exact opaqueior refractive-index does nothing without transparency
+exact bumpflat bumpy of depth 0 == the plain material
+exact noiseflat noise of variance 0 around (1 1 1) == the plain material
+exact nogrout tiles with grout-width 0 == the face material
+exact fadesflat fades between two equal colours == that colour
 EOF
 exit $fail
