@@ -1,6 +1,7 @@
 #!/bin/sh
 # tests/cli/examples.sh - every example scene parses (--check exits 0) and
-# renders at 80x60 to a picture that is not all black.
+# renders at 80x60 to a picture that is not all black; two examples with
+# sphere lights, glass and shaders give the same bytes for any -j and tile.
 set -u
 M=bin/portray-master
 OUT=tests/out/examples
@@ -27,5 +28,15 @@ for n in exam_001 exam_002 exam_003 exam_004 exam_005 exam_006 exam_007 bgammon 
 		continue
 	fi
 	echo "ok   $n"
+done
+for n in exam_004 bgammon; do
+	$M -q -j 1 --tile 16 --size 96x72 -o "$OUT/$n.j1.ppm" "examples/$n.sce" &&
+		$M -q -j 2 --tile 7 --size 96x72 -o "$OUT/$n.j2.ppm" "examples/$n.sce" || fail=1
+	if cmp -s "$OUT/$n.j1.ppm" "$OUT/$n.j2.ppm"; then
+		echo "ok   $n: -j 1 --tile 16 == -j 2 --tile 7"
+	else
+		echo "FAIL $n: -j 1 --tile 16 and -j 2 --tile 7 differ"
+		fail=1
+	fi
 done
 exit $fail
