@@ -15,6 +15,9 @@
 /* Purpose tag for the filters' own random numbers (the layer index is added),
  * so they never coincide with the streams shading derives from the seed. */
 #define FILTER_RNG_TAG 0x46494c5445520000ull
+/* Corner cache entries at most (40 MB a thread): only corners on pixel edges
+ * are cached, and a 4096-pixel tile row at the deepest level has fewer. */
+#define FILTER_CACHE_MAX (1 << 20)
 
 static int is_base(enum filter_kind k) { return k == FILTER_STANDARD || k == FILTER_ADAPTIVE; }
 
@@ -52,6 +55,8 @@ int filter_chain_init(struct filter_chain *fc, const struct scene_camera *sc,
 		fc->cache_size = fc->base.cache_size > 0 ? fc->base.cache_size : im->intersect_buffer;
 		if (fc->cache_size < 0)
 			fc->cache_size = 0;
+		if (fc->cache_size > FILTER_CACHE_MAX)
+			fc->cache_size = FILTER_CACHE_MAX;
 	}
 	return 0;
 }
