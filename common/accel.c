@@ -116,9 +116,7 @@ static const uint32_t tri_ix012[3] = { 0, 1, 2 };
 
 struct trace {
 	vec3 o, d;
-	double inv[3];
-	int sgn[3];
-	double inv_dd;
+	double inv_dd; /* 1 / |d|^2 */
 	struct geom_wray w;
 	double tmin, tmax;
 };
@@ -127,12 +125,6 @@ static void trace_init(struct trace *r, vec3 o, vec3 d, double tmin, double tmax
 {
 	r->o = o;
 	r->d = d;
-	double dd[3] = { d.x, d.y, d.z };
-	for (int k = 0; k < 3; k++) {
-		/* a zero component gets a huge finite inverse: no inf * 0 = NaN */
-		r->inv[k] = fabs(dd[k]) > 1e-300 ? 1.0 / dd[k] : copysign(1e300, dd[k]);
-		r->sgn[k] = r->inv[k] < 0;
-	}
 	double a = v3_dot(d, d);
 	r->inv_dd = a > 0 ? 1.0 / a : 0;
 	geom_wray_init(&r->w, o, d);
@@ -141,76 +133,100 @@ static void trace_init(struct trace *r, vec3 o, vec3 d, double tmin, double tmax
 }
 
 /*
- * The ray as the slab tests want it. Both children of a pair are tested at
- * once with 2-wide double SIMD where SSE2 exists, else with the same
- * arithmetic one child at a time: the results are identical.
+ * BOX TESTS IN FLOAT, KEPT CONSERVATIVE. Node bounds are floats rounded
+ * outward, and every item box is padded by BOX_PAD_REL times the largest
+ * coordinate magnitude M of its group before the build. The ray is scaled
+ * exactly by a power of two so that its largest direction component is in
+ * [1, 2) (t scales by the same power), then rounded to float. Errors: the
+ * origin's rounding moves it by at most 2^-24 |o|: when |o| <= 2M that is
+ * below the padding; when |o| > 2M it is at most 2^-23 of the distance to
+ * the box, covered by widening every entry/exit distance by BOX_WIDEN
+ * relative (which also covers the rounding of the subtraction, of the
+ * inverse and of the product, and of tmin/tmax to float). Zero direction
+ * components get an inverse of +-1e30 (never inf, so never inf * 0 = NaN);
+ * the padding keeps that exact enough. Primitive tests stay in double, so
+ * a box test can only let through more, never cull a true hit: BVH and
+ * brute force give the same answers (tests/unit/test_bvh.c checks).
  */
-struct slab_ray {
+#define BOX_PAD_REL 0x1p-19
+#define BOX_WIDEN 0x1p-20
+
+struct ray4 {
 #if defined(__SSE2__)
-	__m128d o[3], inv[3];
+	__m128 o[3], inv[3];
 #else
-	double o[3], inv[3];
+	float o[3], inv[3];
 #endif
-	int near[3], far[3]; /* which row of bvh_pair.b is the near/far plane per axis */
+	double tscale; /* box-space t = ray t * tscale */
 };
 
-static inline void slab_init(struct slab_ray *q, const struct trace *r)
+/* 2^e for an integer e in [-1022, 1023], exactly. */
+static inline double pow2(int e)
 {
-	double o[3] = { r->o.x, r->o.y, r->o.z };
+	uint64_t bits = (uint64_t)(e + 1023) << 52;
+	double x;
+	memcpy(&x, &bits, sizeof x);
+	return x;
+}
+
+static inline void ray4_init(struct ray4 *q, const struct trace *r)
+{
+	double o[3] = { r->o.x, r->o.y, r->o.z }, d[3] = { r->d.x, r->d.y, r->d.z };
+	double m = fmax(fabs(d[0]), fmax(fabs(d[1]), fabs(d[2])));
+	uint64_t bits;
+	memcpy(&bits, &m, sizeof bits);
+	int e = (int)(bits >> 52 & 0x7ff) - 1023; /* floor(log2 m) for normal m */
+	if (e < -1000 || e > 1000)
+		e = 0; /* absurd scales: left unscaled (the +-1e30 rule still holds) */
+	double s = pow2(-e);
+	q->tscale = pow2(e);
 	for (int k = 0; k < 3; k++) {
+		double dk = d[k] * s;
+		float iv = (float)(fabs(dk) > 1e-30 ? 1.0 / dk : copysign(1e30, dk));
 #if defined(__SSE2__)
-		q->o[k] = _mm_set1_pd(o[k]);
-		q->inv[k] = _mm_set1_pd(r->inv[k]);
+		q->o[k] = _mm_set1_ps((float)o[k]);
+		q->inv[k] = _mm_set1_ps(iv);
 #else
-		q->o[k] = o[k];
-		q->inv[k] = r->inv[k];
+		q->o[k] = (float)o[k];
+		q->inv[k] = iv;
 #endif
-		q->near[k] = k + 3 * r->sgn[k];
-		q->far[k] = k + 3 - 3 * r->sgn[k];
 	}
 }
 
-/* 1 + 2 gamma(3) for doubles, rounded up: widens the far distance (Ize 2013) */
-#define SLAB_WIDEN 4.5e-16
-
 /*
- * Robust slab test of both children of p (exact float bounds, double
- * arithmetic, far distance widened by 2 gamma(3)); returns a mask (bit c:
- * child c is hit in [tmin, tmax]) and the entry distances in tn.
+ * Slab test of the four children of nd against [tmin, tmax] (box space).
+ * Returns a mask (bit c: child c may be hit) and the widened entry
+ * distances in tn. NaN bounds (unused slots) never hit: min/max return
+ * their second operand when one is NaN, as SSE's do.
  */
-static inline int pair_hit(const struct bvh_pair *p, const struct slab_ray *q, double tmin, double tmax, double tn[2])
+static inline int node4_hit(const struct bvh4 *nd, const struct ray4 *q, float tmin, float tmax, float tn[4])
 {
 #if defined(__SSE2__)
-#define PAIR_LOAD(row) _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)p->b[row])))
-#define PAIR_AXIS(k)                                                                           \
-	do {                                                                                   \
-		__m128d ta = _mm_mul_pd(_mm_sub_pd(PAIR_LOAD(k), q->o[k]), q->inv[k]);        \
-		__m128d tb = _mm_mul_pd(_mm_sub_pd(PAIR_LOAD(k + 3), q->o[k]), q->inv[k]);    \
-		t0 = _mm_max_pd(_mm_min_pd(ta, tb), t0);                                      \
-		t1 = _mm_min_pd(_mm_max_pd(ta, tb), t1);                                      \
-	} while (0)
-	__m128d t0 = _mm_set1_pd(tmin), t1 = _mm_set1_pd(tmax);
-	PAIR_AXIS(0);
-	PAIR_AXIS(1);
-	PAIR_AXIS(2);
-#undef PAIR_AXIS
-#undef PAIR_LOAD
-	const __m128d absmask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
-	t1 = _mm_add_pd(t1, _mm_mul_pd(_mm_and_pd(t1, absmask), _mm_set1_pd(SLAB_WIDEN)));
-	_mm_storeu_pd(tn, t0);
-	return _mm_movemask_pd(_mm_cmple_pd(t0, t1));
+	__m128 t0 = _mm_set1_ps(tmin), t1 = _mm_set1_ps(tmax);
+	for (int k = 0; k < 3; k++) {
+		__m128 ta = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(nd->lo[k]), q->o[k]), q->inv[k]);
+		__m128 tb = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(nd->hi[k]), q->o[k]), q->inv[k]);
+		t0 = _mm_max_ps(t0, _mm_min_ps(ta, tb));
+		t1 = _mm_min_ps(t1, _mm_max_ps(ta, tb));
+	}
+	const __m128 absmask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff)), w = _mm_set1_ps(BOX_WIDEN);
+	t0 = _mm_sub_ps(t0, _mm_mul_ps(_mm_and_ps(t0, absmask), w));
+	t1 = _mm_add_ps(t1, _mm_mul_ps(_mm_and_ps(t1, absmask), w));
+	_mm_storeu_ps(tn, t0);
+	return _mm_movemask_ps(_mm_cmple_ps(t0, t1));
 #else
 	int mask = 0;
-	for (int c = 0; c < 2; c++) {
-		double t0 = tmin, t1 = tmax;
+	for (int c = 0; c < 4; c++) {
+		float t0 = tmin, t1 = tmax;
 		for (int k = 0; k < 3; k++) {
-			double a = ((double)p->b[k][c] - q->o[k]) * q->inv[k];
-			double b = ((double)p->b[k + 3][c] - q->o[k]) * q->inv[k];
-			double lo = a < b ? a : b, hi = a < b ? b : a;
-			t0 = lo > t0 ? lo : t0;
-			t1 = hi < t1 ? hi : t1;
+			float ta = (nd->lo[k][c] - q->o[k]) * q->inv[k];
+			float tb = (nd->hi[k][c] - q->o[k]) * q->inv[k];
+			float lo = ta < tb ? ta : tb, hi = ta > tb ? ta : tb;
+			t0 = t0 > lo ? t0 : lo;
+			t1 = t1 < hi ? t1 : hi;
 		}
-		t1 += fabs(t1) * SLAB_WIDEN;
+		t0 -= fabsf(t0) * BOX_WIDEN;
+		t1 += fabsf(t1) * BOX_WIDEN;
 		tn[c] = t0;
 		mask |= (t0 <= t1) << c;
 	}
@@ -218,16 +234,19 @@ static inline int pair_hit(const struct bvh_pair *p, const struct slab_ray *q, d
 #endif
 }
 
-/* The same test on one box of six floats (the root's). */
+#define SLAB_WIDEN 4.5e-16 /* 1 + 2 gamma(3) for doubles, rounded up (Ize 2013) */
+
+/* The same test in double on one box of six floats (a root that is a leaf). */
 static bool box_hit(const float b[6], const struct trace *r)
 {
-	double o[3] = { r->o.x, r->o.y, r->o.z };
+	double o[3] = { r->o.x, r->o.y, r->o.z }, d[3] = { r->d.x, r->d.y, r->d.z };
 	double t0 = r->tmin, t1 = r->tmax;
 	for (int k = 0; k < 3; k++) {
-		double a = ((double)b[k + 3 * r->sgn[k]] - o[k]) * r->inv[k];
-		double c = ((double)b[k + 3 - 3 * r->sgn[k]] - o[k]) * r->inv[k];
-		t0 = a > t0 ? a : t0;
-		t1 = c < t1 ? c : t1;
+		double inv = fabs(d[k]) > 1e-300 ? 1.0 / d[k] : copysign(1e300, d[k]);
+		double a = ((double)b[k] - o[k]) * inv, c = ((double)b[k + 3] - o[k]) * inv;
+		double lo = a < c ? a : c, hi = a < c ? c : a;
+		t0 = lo > t0 ? lo : t0;
+		t1 = hi < t1 ? hi : t1;
 	}
 	t1 += fabs(t1) * SLAB_WIDEN;
 	return t0 <= t1;
@@ -411,10 +430,23 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 	switch (REF_KIND(c->ref)) {
 	case REF_SPHERE: {
 		const struct gsphere *sp = &g->sph[i];
-		struct geom_obj go;
-		geom_obj_init(s, sp->obj, &go); /* sphere: no allocation */
-		geom_surface(&go, p, GEOM_PART_MAIN, &h->n, &h->u, &h->v);
-		h->ng = h->n;
+		const struct prim_sphere *ps = &s->objects[sp->obj].u.sphere;
+		vec3 q = v3_norm(v3_sub(p, sp->c));
+		h->n = h->ng = q;
+		if (ps->pole.x == 0 && ps->pole.y == 1 && ps->pole.z == 0 && ps->equator.x == 1 &&
+		    ps->equator.y == 0 && ps->equator.z == 0) {
+			/* the default frame: P = +y, E = +x, W = P x E = -z (as geom_surface) */
+			double phi = atan2(-q.z, q.x);
+			if (phi < 0)
+				phi += 2 * M_PI;
+			h->u = ps->radius * (phi >= 2 * M_PI ? 0 : phi);
+			h->v = ps->radius * (asin(q.y > 1 ? 1 : q.y < -1 ? -1 : q.y) + M_PI / 2);
+		} else {
+			struct geom_obj go;
+			geom_obj_init(s, sp->obj, &go); /* sphere: no allocation */
+			geom_surface(&go, p, GEOM_PART_MAIN, &h->n, &h->u, &h->v);
+			h->ng = h->n;
+		}
 		h->mp = p;
 		h->object = sp->obj;
 		h->material = s->objects[sp->obj].material;
@@ -501,40 +533,54 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 		for (uint32_t k = 0; k < g->n_refs; k++)
 			if (REF_KIND(g->refs[k]) >= REF_XPRIM)
 				found |= ref_test(A, g, g->refs[k], r, &best, true);
-	} else if (g->bvh.n_nodes && box_hit(g->bvh.root_b, r)) {
-		const struct bvh_pair *pairs = g->bvh.pairs;
-		struct slab_ray q;
-		slab_init(&q, r);
-		const double tmin = r->tmin;
-		double tmax = r->tmax;
+	} else if (g->bvh.root_n) { /* the root is one leaf */
+		if (box_hit(g->bvh.root_b, r))
+			for (uint32_t k = 0; k < g->bvh.root_n; k++)
+				found |= ref_test(A, g, g->refs[g->bvh.root_idx + k], r, &best, false);
+	} else if (g->bvh.n_nodes4) {
+		const struct bvh4 *nodes = g->bvh.nodes;
+		struct ray4 q;
+		ray4_init(&q, r);
+		const float tmin = (float)(r->tmin * q.tscale);
+		float tmax = (float)(r->tmax * q.tscale);
 		struct {
 			uint32_t idx, n;
-			double t;
-		} stack[BVH_MAX_DEPTH + 1];
+			float t;
+		} stack[3 * BVH_MAX_DEPTH + 4];
 		int sp = 0;
-		uint32_t idx = g->bvh.root_idx, n = g->bvh.root_n;
+		uint32_t idx = 0, n = 0;
 		for (;;) {
 			if (n) {
 				for (uint32_t k = 0; k < n; k++)
 					found |= ref_test(A, g, g->refs[idx + k], r, &best, false);
-				tmax = r->tmax;
+				tmax = (float)(r->tmax * q.tscale);
 			} else {
-				const struct bvh_pair *p = &pairs[idx];
-				double tn[2];
-				int m = pair_hit(p, &q, tmin, tmax, tn);
-				if (m == 3) {
-					int near = tn[1] < tn[0], far = 1 - near;
-					stack[sp].idx = p->idx[far];
-					stack[sp].n = p->n[far];
-					stack[sp++].t = tn[far];
-					idx = p->idx[near];
-					n = p->n[near];
+				const struct bvh4 *nd = &nodes[idx];
+				float tn[4];
+				int m = node4_hit(nd, &q, tmin, tmax, tn);
+				if (m && !(m & (m - 1))) { /* one child */
+					int c = __builtin_ctz((unsigned)m);
+					idx = nd->idx[c];
+					n = nd->n[c];
 					continue;
 				}
-				if (m) {
-					int c = m >> 1;
-					idx = p->idx[c];
-					n = p->n[c];
+				if (m) { /* nearest first; the others pushed farthest first */
+					int cs[4], k = 0;
+					for (int c = 0; c < 4; c++) {
+						if (!(m >> c & 1))
+							continue;
+						int j = k++;
+						for (; j > 0 && tn[cs[j - 1]] > tn[c]; j--)
+							cs[j] = cs[j - 1];
+						cs[j] = c;
+					}
+					for (int j = k - 1; j >= 1; j--) {
+						stack[sp].idx = nd->idx[cs[j]];
+						stack[sp].n = nd->n[cs[j]];
+						stack[sp++].t = tn[cs[j]];
+					}
+					idx = nd->idx[cs[0]];
+					n = nd->n[cs[0]];
 					continue;
 				}
 			}
@@ -561,36 +607,43 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 	for (uint32_t k = 0; k < g->n_unb; k++)
 		if (ref_occludes(A, g, g->unb[k], r))
 			return true;
-	if (!g->bvh.n_nodes || !box_hit(g->bvh.root_b, r))
+	if (g->bvh.root_n) {
+		if (box_hit(g->bvh.root_b, r))
+			for (uint32_t k = 0; k < g->bvh.root_n; k++)
+				if (ref_occludes(A, g, g->refs[g->bvh.root_idx + k], r))
+					return true;
 		return false;
-	const struct bvh_pair *pairs = g->bvh.pairs;
-	struct slab_ray q;
-	slab_init(&q, r);
+	}
+	if (!g->bvh.n_nodes4)
+		return false;
+	const struct bvh4 *nodes = g->bvh.nodes;
+	struct ray4 q;
+	ray4_init(&q, r);
+	const float tmin = (float)(r->tmin * q.tscale), tmax = (float)(r->tmax * q.tscale);
 	struct {
 		uint32_t idx, n;
-	} stack[BVH_MAX_DEPTH + 1];
+	} stack[3 * BVH_MAX_DEPTH + 4];
 	int sp = 0;
-	uint32_t idx = g->bvh.root_idx, n = g->bvh.root_n;
+	uint32_t idx = 0, n = 0;
 	for (;;) {
 		if (n) {
 			for (uint32_t k = 0; k < n; k++)
 				if (ref_occludes(A, g, g->refs[idx + k], r))
 					return true;
 		} else {
-			const struct bvh_pair *p = &pairs[idx];
-			double tn[2];
-			int m = pair_hit(p, &q, r->tmin, r->tmax, tn);
-			if (m == 3) {
-				stack[sp].idx = p->idx[1];
-				stack[sp++].n = p->n[1];
-				idx = p->idx[0];
-				n = p->n[0];
-				continue;
-			}
+			const struct bvh4 *nd = &nodes[idx];
+			float tn[4];
+			int m = node4_hit(nd, &q, tmin, tmax, tn);
 			if (m) {
-				int c = m >> 1;
-				idx = p->idx[c];
-				n = p->n[c];
+				int c = __builtin_ctz((unsigned)m);
+				for (int j = 3; j > c; j--) {
+					if (m >> j & 1) {
+						stack[sp].idx = nd->idx[j];
+						stack[sp++].n = nd->n[j];
+					}
+				}
+				idx = nd->idx[c];
+				n = nd->n[c];
 				continue;
 			}
 		}
@@ -959,6 +1012,16 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	A->st.n_prims += g->n_sph + g->n_tri + g->n_xp;
 
 	/* pass 3: the BVH over the bounded references */
+	double big = 0; /* the group's largest coordinate magnitude: see BOX_PAD_REL */
+	for (uint32_t k = 0; k < n_bounded; k++) {
+		big = fmax(big, fmax(fmax(fabs(boxes[k].lo.x), fabs(boxes[k].lo.y)), fabs(boxes[k].lo.z)));
+		big = fmax(big, fmax(fmax(fabs(boxes[k].hi.x), fabs(boxes[k].hi.y)), fabs(boxes[k].hi.z)));
+	}
+	vec3 pad = v3(big * BOX_PAD_REL, big * BOX_PAD_REL, big * BOX_PAD_REL);
+	for (uint32_t k = 0; k < n_bounded; k++) {
+		boxes[k].lo = v3_sub(boxes[k].lo, pad);
+		boxes[k].hi = v3_add(boxes[k].hi, pad);
+	}
 	perm = malloc((n_bounded ? n_bounded : 1) * sizeof *perm);
 	g->refs = malloc((n_bounded ? n_bounded : 1) * sizeof *g->refs);
 	if (!perm || !g->refs)
@@ -970,8 +1033,8 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 		g->refs[k] = all[perm[k]];
 		g->bounds = geom_box_union(g->bounds, boxes[k]);
 	}
-	g->bytes += (size_t)g->bvh.n_pairs * sizeof(struct bvh_pair) + (size_t)(n_bounded + n_unb) * sizeof(uint32_t);
-	A->st.n_nodes += g->bvh.n_nodes;
+	g->bytes += (size_t)g->bvh.n_nodes4 * sizeof(struct bvh4) + (size_t)(n_bounded + n_unb) * sizeof(uint32_t);
+	A->st.n_nodes += g->bvh.n_nodes4;
 	A->st.bytes += g->bytes;
 	free(perm);
 	free(all);

@@ -185,26 +185,53 @@ leaf:
 	nd->n = n;
 }
 
-/* Copies node ni's interior into pair pi; children's pairs follow in DFS order. */
-static void to_pairs(const struct bvh_node *nodes, uint32_t ni, struct bvh_pair *pairs, uint32_t pi, uint32_t *next)
+/*
+ * Collapses binary node ni (interior) into 4-wide node *next, opening the
+ * largest interior child until four children or only leaves remain;
+ * children's nodes follow in depth-first order. Returns its index.
+ */
+static uint32_t collapse(const struct bvh_node *nodes, uint32_t ni, struct bvh4 *out, uint32_t *next)
 {
-	const struct bvh_node *nd = &nodes[ni];
-	struct bvh_pair *p = &pairs[pi];
-	for (int c = 0; c < 2; c++) {
-		const struct bvh_node *ch = &nodes[nd->idx + c];
-		for (int k = 0; k < 6; k++)
-			p->b[k][c] = ch->b[k];
-		if (ch->n) {
-			p->idx[c] = ch->idx;
-			p->n[c] = ch->n;
-		} else {
-			uint32_t cp = (*next)++;
-			p->idx[c] = cp;
-			p->n[c] = 0;
-			to_pairs(nodes, nd->idx + c, pairs, cp, next);
-			p = &pairs[pi];
+	uint32_t me = (*next)++;
+	uint32_t ch[4] = { nodes[ni].idx, nodes[ni].idx + 1, 0, 0 };
+	int nc = 2;
+	while (nc < 4) {
+		int best = -1;
+		double best_area = -1;
+		for (int c = 0; c < nc; c++) {
+			const struct bvh_node *x = &nodes[ch[c]];
+			if (x->n)
+				continue;
+			struct geom_box bx = { v3(x->b[0], x->b[1], x->b[2]), v3(x->b[3], x->b[4], x->b[5]) };
+			double a = box_area(bx);
+			if (a > best_area)
+				best_area = a, best = c;
 		}
+		if (best < 0)
+			break;
+		uint32_t x = ch[best];
+		ch[best] = nodes[x].idx;
+		ch[nc++] = nodes[x].idx + 1;
 	}
+	struct bvh4 nd;
+	for (int c = 0; c < 4; c++) {
+		if (c >= nc) {
+			for (int k = 0; k < 3; k++)
+				nd.lo[k][c] = nd.hi[k][c] = NAN;
+			nd.idx[c] = 0;
+			nd.n[c] = 0;
+			continue;
+		}
+		const struct bvh_node *x = &nodes[ch[c]];
+		for (int k = 0; k < 3; k++) {
+			nd.lo[k][c] = x->b[k];
+			nd.hi[k][c] = x->b[k + 3];
+		}
+		nd.n[c] = x->n;
+		nd.idx[c] = x->n ? x->idx : collapse(nodes, ch[c], out, next);
+	}
+	out[me] = nd;
+	return me;
 }
 
 int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf)
@@ -231,14 +258,18 @@ int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t 
 	b->root_idx = B.nodes[0].idx;
 	b->root_n = B.nodes[0].n;
 	if (!b->root_n) {
-		b->n_pairs = (B.n_nodes - 1) / 2;
-		b->pairs = malloc((size_t)b->n_pairs * sizeof *b->pairs);
-		if (!b->pairs) {
+		uint32_t cap = (B.n_nodes - 1) / 2; /* interior binary nodes bound the 4-wide ones */
+		b->nodes = malloc((size_t)cap * sizeof *b->nodes);
+		if (!b->nodes) {
 			free(B.nodes);
 			return -1;
 		}
-		uint32_t next = 1;
-		to_pairs(B.nodes, 0, b->pairs, 0, &next);
+		uint32_t next = 0;
+		collapse(B.nodes, 0, b->nodes, &next);
+		b->n_nodes4 = next;
+		struct bvh4 *fit = realloc(b->nodes, (size_t)next * sizeof *fit);
+		if (fit)
+			b->nodes = fit;
 		b->root_idx = 0;
 	}
 	free(B.nodes);
@@ -249,6 +280,6 @@ void bvh_free(struct bvh *b)
 {
 	if (!b)
 		return;
-	free(b->pairs);
+	free(b->nodes);
 	memset(b, 0, sizeof *b);
 }

@@ -24,25 +24,25 @@ struct bvh_node {
 };
 
 /*
- * What traversal reads: one record per interior node holding BOTH children's
- * bounds side by side (b[k][c]: k = min x, min y, min z, max x, max y, max z;
- * c = child), so one 2-wide double SIMD slab test covers both children and a
- * step of the traversal touches one 64-byte line.
- * Child c: n[c] == 0: interior, idx[c] is its pair; else a leaf of items
- * perm[idx[c] .. idx[c]+n[c]).
+ * What traversal reads: a 4-wide node (128 bytes, two cache lines) holding
+ * its children's bounds side by side (lo[axis][c], hi[axis][c]), so one
+ * 4-wide float SIMD slab test covers all four. Bounds are the builder's
+ * (rounded outward to float); unused slots have NaN bounds, which the slab
+ * test never reports as hit. Child c: n[c] == 0: interior, idx[c] is its
+ * node; else a leaf of items perm[idx[c] .. idx[c]+n[c]).
  */
-struct bvh_pair {
-	float b[6][2];
-	uint32_t idx[2];
-	uint32_t n[2];
+struct bvh4 {
+	float lo[3][4], hi[3][4];
+	uint32_t idx[4];
+	uint32_t n[4];
 };
 
 struct bvh {
-	struct bvh_pair *pairs; /* owned; pair 0 holds the root's children */
-	uint32_t n_pairs;
-	float root_b[6];        /* the root's bounds */
-	uint32_t root_idx, root_n; /* root_n > 0: the root is a leaf; else pair 0 */
-	uint32_t n_nodes;       /* nodes the builder made (for statistics) */
+	struct bvh4 *nodes;     /* owned; node 0 is the root unless root_n > 0 */
+	uint32_t n_nodes4;
+	float root_b[6];        /* the root's bounds: min x y z, max x y z */
+	uint32_t root_idx, root_n; /* root_n > 0: the root is a leaf (no nodes) */
+	uint32_t n_nodes;       /* binary nodes the builder made (statistics) */
 };
 
 /*

@@ -125,23 +125,27 @@ static void builder(void)
 		struct bvh b;
 		CHECK(bvh_build(&b, bx, n, perm, 4) == 0);
 		CHECK(b.n_nodes >= 1 && b.n_nodes <= 2 * n);
-		CHECK(b.root_n == 0 && b.n_pairs == (b.n_nodes - 1) / 2);
+		CHECK(b.root_n == 0 && b.n_nodes4 >= 1 && b.n_nodes4 <= (b.n_nodes - 1) / 2);
 		int bad = 0;
 		uint32_t covered = 0;
-		for (uint32_t pi = 0; pi < b.n_pairs; pi++) {
-			const struct bvh_pair *p = &b.pairs[pi];
-			for (int c = 0; c < 2; c++) {
+		for (uint32_t ni = 0; ni < b.n_nodes4; ni++) {
+			const struct bvh4 *p = &b.nodes[ni];
+			for (int c = 0; c < 4; c++) {
+				if (isnan(p->lo[0][c])) { /* unused slot: all NaN, nothing after it */
+					bad += !isnan(p->hi[2][c]) || (c < 3 && !isnan(p->lo[0][c + 1])) || c < 2;
+					continue;
+				}
 				if (!p->n[c]) {
-					bad += p->idx[c] <= pi || p->idx[c] >= b.n_pairs; /* children after parents */
+					bad += p->idx[c] <= ni || p->idx[c] >= b.n_nodes4; /* children after parents */
 					continue;
 				}
 				for (uint32_t k = p->idx[c]; k < p->idx[c] + p->n[c]; k++) {
 					uint32_t it = perm[k];
 					seen[it]++;
 					covered++;
-					bad += !(p->b[0][c] <= bx[it].lo.x && p->b[1][c] <= bx[it].lo.y &&
-						 p->b[2][c] <= bx[it].lo.z && p->b[3][c] >= bx[it].hi.x &&
-						 p->b[4][c] >= bx[it].hi.y && p->b[5][c] >= bx[it].hi.z);
+					bad += !(p->lo[0][c] <= bx[it].lo.x && p->lo[1][c] <= bx[it].lo.y &&
+						 p->lo[2][c] <= bx[it].lo.z && p->hi[0][c] >= bx[it].hi.x &&
+						 p->hi[1][c] >= bx[it].hi.y && p->hi[2][c] >= bx[it].hi.z);
 				}
 			}
 		}
@@ -152,7 +156,7 @@ static void builder(void)
 		/* a single item: the root is a leaf */
 		struct bvh b1;
 		CHECK(bvh_build(&b1, bx, 1, perm, 4) == 0);
-		CHECK(b1.n_pairs == 0 && b1.root_n == 1 && b1.root_idx == 0);
+		CHECK(b1.n_nodes4 == 0 && b1.root_n == 1 && b1.root_idx == 0);
 		bvh_free(&b1);
 		bvh_free(&b);
 		free(bx);
