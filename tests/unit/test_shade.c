@@ -288,8 +288,8 @@ static void test_reflection(void)
 	add_point_light(s, v3(0, 3, 100), v3(1, 1, 1), 0, false);
 	/* eye at (0,3,5) looking down at (0,0,0): the reflected ray goes to (0,3,-5) */
 	vec3 c = shoot(s, v3(0, 3, 5), v3(0, -3, -5), 1);
-	/* the reflected ray hits the ball at its front point, whose normal is (0,0,1)... not
-	 * exactly: it arrives along (0,3,-5)/|.|, hitting at the point facing it */
+	/* the reflected ray travels along (0,3,-5) straight at the ball's centre and
+	 * hits the point of the ball that faces the origin */
 	vec3 rd = v3_norm(v3(0, 3, -5));
 	/* ball front point along rd from the origin: solve |t rd - (0,3,-5)| = 1 */
 	double bb = v3_dot(rd, v3(0, 3, -5)), t = bb - sqrt(bb * bb - (34 - 1));
