@@ -172,7 +172,9 @@ static inline double pow2(int e)
 static inline void ray4_init(struct ray4 *q, const struct trace *r)
 {
 	double o[3] = { r->o.x, r->o.y, r->o.z }, d[3] = { r->d.x, r->d.y, r->d.z };
-	double m = fmax(fabs(d[0]), fmax(fabs(d[1]), fabs(d[2])));
+	double ax = fabs(d[0]), ay = fabs(d[1]), az = fabs(d[2]);
+	double m = ax > ay ? ax : ay;
+	m = m > az ? m : az;
 	uint64_t bits;
 	memcpy(&bits, &m, sizeof bits);
 	int e = (int)(bits >> 52 & 0x7ff) - 1023; /* floor(log2 m) for normal m */
@@ -378,8 +380,8 @@ static __attribute__((noinline)) bool ref_test_slow(const struct accel *A, const
 
 /* Tests one reference; on a hit closer than r->tmax records it in *c and
  * shrinks r->tmax. */
-static inline bool ref_test(const struct accel *A, const struct group *g, uint32_t ref, struct trace *r,
-			    struct cand *c, bool brute)
+static inline __attribute__((always_inline)) bool ref_test(const struct accel *A, const struct group *g,
+							    uint32_t ref, struct trace *r, struct cand *c, bool brute)
 {
 	uint32_t i = REF_IDX(ref);
 	double t;
