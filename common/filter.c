@@ -265,10 +265,12 @@ struct adapt {
 static vec3 corner(struct adapt *a, uint32_t x, uint32_t y)
 {
 	struct filter_scratch *sc = a->scratch;
-	int shared = x % a->grid == 0 || y % a->grid == 0;
+	int shared = (x & (a->grid - 1)) == 0 || (y & (a->grid - 1)) == 0;
 	struct corner *e = NULL;
 	if (shared && sc && sc->n) {
-		e = &sc->cache[rng_mix((uint64_t)x << 32 | y) % sc->n];
+		/* slot = hash scaled into [0, n) by a multiply, not a division */
+		uint64_t hsh = rng_mix((uint64_t)x << 32 | y) >> 32;
+		e = &sc->cache[(hsh * sc->n) >> 32];
 		if (e->used && e->x == x && e->y == y)
 			return e->c;
 	}
@@ -285,7 +287,9 @@ static vec3 corner(struct adapt *a, uint32_t x, uint32_t y)
 	return v;
 }
 
-static double clamp01(double v) { return fmin(fmax(v, 0.0), 1.0); }
+/* Clamps to [0,1]; NaN becomes 0. Comparisons, not fmin/fmax: those are
+ * library calls at -O2 and this runs for every corner. */
+static inline double clamp01(double v) { return v > 0.0 ? (v < 1.0 ? v : 1.0) : 0.0; }
 
 /* Largest channel difference between two colours as displayed (clamped). */
 static double cdiff(vec3 a, vec3 b)
@@ -293,7 +297,8 @@ static double cdiff(vec3 a, vec3 b)
 	double dx = fabs(clamp01(a.x) - clamp01(b.x));
 	double dy = fabs(clamp01(a.y) - clamp01(b.y));
 	double dz = fabs(clamp01(a.z) - clamp01(b.z));
-	return fmax(dx, fmax(dy, dz));
+	double m = dx > dy ? dx : dy;
+	return m > dz ? m : dz;
 }
 
 /*
@@ -339,7 +344,8 @@ vec3 filter_pixel(const struct filter_chain *fc, struct filter_scratch *scratch,
 
 void filter_quantise(vec3 c, uint8_t out[3])
 {
-	out[0] = (uint8_t)floor(clamp01(c.x) * 255.0 + 0.5);
-	out[1] = (uint8_t)floor(clamp01(c.y) * 255.0 + 0.5);
-	out[2] = (uint8_t)floor(clamp01(c.z) * 255.0 + 0.5);
+	/* the values are >= 0.5, so truncation is floor */
+	out[0] = (uint8_t)(clamp01(c.x) * 255.0 + 0.5);
+	out[1] = (uint8_t)(clamp01(c.y) * 255.0 + 0.5);
+	out[2] = (uint8_t)(clamp01(c.z) * 255.0 + 0.5);
 }
