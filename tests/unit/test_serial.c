@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "common/parse.h"
 #include "proto/serial.h"
 #include "scene_fixture.h"
 
@@ -186,8 +187,31 @@ static void test_deep_nesting(void)
 	scene_free(s);
 }
 
+/* Parsed scenes (every SPD scene, a mesh scene, the farm's test scene) round-trip. */
+static void test_parsed(void)
+{
+	const char *files[] = { "tests/data/spd/balls_s4.sce", "tests/data/spd/gears_s2.sce",
+				"tests/data/spd/rings_s3.sce", "tests/data/spd/tetra_s4.sce",
+				"tests/data/meshes/spot.sce", "tests/e2e/farm_scene.sce" };
+	for (size_t i = 0; i < sizeof files / sizeof *files; i++) {
+		struct scene *s = NULL;
+		struct scene_error err;
+		if (parse_files(NULL, files[i], &s, &err) != 0) {
+			fprintf(stderr, "%s\n", err.msg);
+			CHECK(!"parse failed");
+			continue;
+		}
+		size_t len;
+		uint8_t *a = round_trip(s, &len);
+		CHECK(a != NULL && len > 0);
+		free(a);
+		scene_free(s);
+	}
+}
+
 int main(void)
 {
+	test_parsed();
 	test_fixture();
 	test_hostile_counts();
 	test_deep_nesting();
