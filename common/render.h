@@ -35,7 +35,7 @@ int renderer_set_size(struct renderer *r, uint32_t w, uint32_t h);
  */
 void renderer_tile(const struct renderer *r, struct tile_rect t, uint8_t *rgb);
 /*
- * As renderer_tile, but gives up between pixels when cancel (may be NULL)
+ * As renderer_tile, but gives up between pixel rows when cancel (may be NULL)
  * becomes non-zero. Returns 1 when the whole tile is in rgb, 0 when it gave up
  * (rgb then holds a partial tile: do not use it).
  */
