@@ -104,7 +104,7 @@ struct group {
 
 struct accel {
 	const struct scene *s;
-	struct geom_obj **gobj;   /* per object, built on demand (owned) */
+	struct geom_obj **gobj;   /* per object, built on demand; NULL until needed (owned) */
 	struct group **dgroup;    /* per define, built on first use (owned) */
 	struct group *root;
 	struct accel_stats st;
@@ -744,6 +744,12 @@ void accel_free(struct accel *a)
 /* The geom_obj of object i, made on first use; NULL when out of memory. */
 static struct geom_obj *get_gobj(struct accel *A, uint32_t i)
 {
+	if (!A->gobj) { /* the table exists only in scenes that need it */
+		A->gobj = calloc((size_t)A->s->n_objects + 1, sizeof *A->gobj);
+		if (!A->gobj)
+			return NULL;
+		A->st.bytes += ((size_t)A->s->n_objects + 1) * sizeof *A->gobj;
+	}
 	if (!A->gobj[i]) {
 		struct geom_obj *g = malloc(sizeof *g);
 		if (!g)
@@ -1123,13 +1129,12 @@ int accel_build(const struct scene *s, struct accel **out, struct scene_error *e
 	if (!A)
 		return scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
 	A->s = s;
-	A->gobj = calloc((size_t)s->n_objects + 1, sizeof *A->gobj);
 	A->dgroup = calloc((size_t)s->n_defines + 1, sizeof *A->dgroup);
-	if (!A->gobj || !A->dgroup) {
+	if (!A->dgroup) {
 		accel_free(A);
 		return scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
 	}
-	A->st.bytes = sizeof *A + ((size_t)s->n_objects + s->n_defines) * sizeof(void *);
+	A->st.bytes = sizeof *A + (size_t)s->n_defines * sizeof(void *);
 	A->st.instance_bytes = sizeof(struct ginst);
 	A->root = build_group(A, s->roots, s->n_roots, err);
 	if (!A->root) {
