@@ -29,6 +29,8 @@ for key in q '\033'; do
 	grep -Eq 'stopped: [0-9]+ of 900 tiles \([0-9]+%\) written to' "$TMP/log2" ||
 		fail "key '$key': no 'stopped' message: $(tail -c 300 "$TMP/log2")"
 	grep -q '^rc=0$' "$TMP/log2" || fail "key '$key': exit status not 0"
+	grep -Eq '[0-9]+% \[#*\.*\] [0-9]+/900 tiles .* elapsed  ETA ' "$TMP/log2" ||
+		fail "key '$key': no progress bar on the terminal"
 	ppm_check "$TMP/k.ppm" 600 600
 	[ "$(ppm_pixel "$TMP/k.ppm" 600 599 599)" = "0 0 0" ] || fail "key '$key': unfinished pixel not black"
 	# terminal restored: canonical mode and echo
@@ -37,12 +39,13 @@ for key in q '\033'; do
 	grep -Eq '(^| )-echo( |$)' "$TMP/log2" && fail "key '$key': echo left off"
 done
 
-# nonstop: q is ignored, the render completes
+# nonstop: q is ignored, the render completes; -q: no bar even on a terminal
 slow_scene "$TMP/ns.sce" 200 nonstop
-on_tty q 0.3 "$TMP/log" "'$MASTER' '$TMP/ns.sce' -o '$TMP/ns.ppm' -j 1 --tile 20; echo rc=\$?"
+on_tty q 0.3 "$TMP/log" "'$MASTER' -q '$TMP/ns.sce' -o '$TMP/ns.ppm' -j 1 --tile 20; echo rc=\$?"
 tr -d '\r' <"$TMP/log" >"$TMP/log2"
 grep -q 'stopped' "$TMP/log2" && fail "nonstop: a key stopped the render"
-grep -q '^rc=0$' "$TMP/log2" || fail "nonstop: exit status not 0: $(tail -c 300 "$TMP/log2")"
+grep -q 'ETA' "$TMP/log2" && fail "-q: progress bar drawn"
+grep -q 'rc=0$' "$TMP/log2" || fail "nonstop: exit status not 0: $(tail -c 300 "$TMP/log2")"
 ppm_check "$TMP/ns.ppm" 200 200
 [ "$(ppm_pixel "$TMP/ns.ppm" 200 199 199)" != "0 0 0" ] || fail "nonstop: image not complete"
 echo "render_keys: ok"
