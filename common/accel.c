@@ -797,6 +797,99 @@ static struct geom_box pad_box(struct geom_box b)
 
 static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t n, struct scene_error *err);
 
+/* Bounded references and their boxes while a group is built (grows). */
+struct refbuf {
+	uint32_t *ref;
+	struct geom_box *box;
+	uint32_t n, cap;
+};
+
+static int refbuf_push(struct refbuf *b, uint32_t ref, struct geom_box box)
+{
+	if (b->n == b->cap) {
+		if (b->cap >= ACCEL_MAX_REFS)
+			return -1;
+		uint32_t nc = b->cap ? (b->cap > ACCEL_MAX_REFS / 2 ? ACCEL_MAX_REFS : b->cap * 2) : 64;
+		uint32_t *nr = realloc(b->ref, (size_t)nc * sizeof *nr);
+		if (!nr)
+			return -1;
+		b->ref = nr;
+		struct geom_box *nbx = realloc(b->box, (size_t)nc * sizeof *nbx);
+		if (!nbx)
+			return -1;
+		b->box = nbx;
+		b->cap = nc;
+	}
+	b->ref[b->n] = ref;
+	b->box[b->n++] = box;
+	return 0;
+}
+
+/* Early split clipping: a triangle whose box is SPLIT_RATIO times its own
+ * area or more (long diagonal slivers, as ear-clipped gear faces make) is
+ * referenced by the boxes of its pieces clipped to halves of its box, down
+ * to SPLIT_DEPTH levels. The pieces cover the triangle; a ray meeting it
+ * through two pieces tests it twice and keeps the one t. */
+#define SPLIT_RATIO 16.0
+#define SPLIT_DEPTH 3
+
+/* Clips convex polygon p (n <= 9 + depth vertices) to the side of the plane
+ * x[axis] = at given by keep_below; returns the new count (out has room). */
+static int clip_half(const vec3 *p, int n, int axis, double at, bool keep_below, vec3 *out)
+{
+	int m = 0;
+	for (int i = 0; i < n; i++) {
+		vec3 a = p[i], b = p[(i + 1) % n];
+		double da = v3_comp(a, axis) - at, db = v3_comp(b, axis) - at;
+		if (!keep_below)
+			da = -da, db = -db;
+		if (da <= 0)
+			out[m++] = a;
+		if ((da < 0 && db > 0) || (da > 0 && db < 0)) {
+			vec3 x = v3_lerp(a, b, da / (da - db));
+			if (axis == 0)
+				x.x = at;
+			else if (axis == 1)
+				x.y = at;
+			else
+				x.z = at;
+			out[m++] = x;
+		}
+	}
+	return m;
+}
+
+static int push_pieces(struct refbuf *rb, uint32_t ref, const vec3 *poly, int n, int depth)
+{
+	struct geom_box bx = geom_box_empty();
+	for (int i = 0; i < n; i++)
+		bx = geom_box_point(bx, poly[i]);
+	vec3 e = v3_sub(bx.hi, bx.lo);
+	if (depth == SPLIT_DEPTH || !(e.x > 0 || e.y > 0 || e.z > 0))
+		return refbuf_push(rb, ref, pad_box(bx));
+	int axis = e.x >= e.y && e.x >= e.z ? 0 : e.y >= e.z ? 1 : 2;
+	double at = 0.5 * (v3_comp(bx.lo, axis) + v3_comp(bx.hi, axis));
+	vec3 half[16];
+	for (int side = 0; side < 2; side++) {
+		int m = clip_half(poly, n, axis, at, side == 0, half);
+		if (m >= 3 && push_pieces(rb, ref, half, m, depth + 1) < 0)
+			return -1;
+	}
+	return 0;
+}
+
+static int push_triangle(struct refbuf *rb, uint32_t ref, vec3 a, vec3 b, vec3 c)
+{
+	struct geom_box bx = geom_box_point(geom_box_point(geom_box_point(geom_box_empty(), a), b), c);
+	vec3 e = v3_sub(bx.hi, bx.lo);
+	double box_area = 2 * (e.x * e.y + e.y * e.z + e.z * e.x);
+	double tri_area = 0.5 * v3_len(v3_cross(v3_sub(b, a), v3_sub(c, a)));
+	if (!(tri_area > 0) || box_area < SPLIT_RATIO * tri_area)
+		return refbuf_push(rb, ref, pad_box(bx));
+	vec3 p[3] = { a, b, c };
+	return push_pieces(rb, ref, p, 3, 0);
+}
+
 /* The group of define d, built once. */
 static struct group *define_group(struct accel *A, uint32_t d, struct scene_error *err)
 {
@@ -824,6 +917,7 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	struct group *g = calloc(1, sizeof *g);
 	struct geom_box *boxes = NULL;
 	uint32_t *all = NULL, *perm = NULL;
+	struct refbuf rb = { NULL, NULL, 0, 0 };
 	if (!g)
 		goto oom;
 	/* pass 1: counts */
@@ -869,15 +963,13 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	g->xp = malloc((n_xp ? n_xp : 1) * sizeof *g->xp);
 	g->inst = malloc((n_inst ? n_inst : 1) * sizeof *g->inst);
 	g->bake = malloc((n_bake ? n_bake : 1) * sizeof *g->bake);
-	all = malloc((n_all ? n_all : 1) * sizeof *all);
-	boxes = malloc((n_all ? n_all : 1) * sizeof *boxes);
-	if (!g->sph || !g->mesh || !g->tri || !g->xp || !g->inst || !g->bake || !all || !boxes)
+	if (!g->sph || !g->mesh || !g->tri || !g->xp || !g->inst || !g->bake)
 		goto oom;
 	g->bytes = sizeof *g + n_sph * sizeof *g->sph + n_mesh * sizeof *g->mesh + n_tri * sizeof *g->tri +
 		   n_xp * sizeof *g->xp + n_inst * sizeof *g->inst + n_bake * sizeof *g->bake;
 
 	/* pass 2: fill; bounded references go to all[]/boxes[], the rest to unb */
-	uint32_t n_bounded = 0, n_unb = 0;
+	uint32_t n_unb = 0;
 	uint32_t *unb = malloc((n_all ? n_all : 1) * sizeof *unb);
 	if (!unb)
 		goto oom;
@@ -896,8 +988,8 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			vec3 rr = v3(o->u.sphere.radius, o->u.sphere.radius, o->u.sphere.radius);
 			bx.lo = v3_sub(sp->c, rr);
 			bx.hi = v3_add(sp->c, rr);
-			all[n_bounded] = REF_MAKE(REF_SPHERE, g->n_sph++);
-			boxes[n_bounded++] = pad_box(bx);
+			if (refbuf_push(&rb, REF_MAKE(REF_SPHERE, g->n_sph++), pad_box(bx)) < 0)
+				goto oom;
 			continue;
 		}
 		if (o->kind == PRIM_TRIANGLE || o->kind == PRIM_RAW) {
@@ -957,13 +1049,10 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			}
 			for (uint32_t q = 0; q < ntri; q++) {
 				const uint32_t *ix = tri_ix(m, q);
-				struct geom_box tb = geom_box_empty();
-				for (int c = 0; c < 3; c++)
-					tb = geom_box_point(tb, m->v[ix[c]]);
 				g->tri[g->n_tri].mesh = g->n_mesh;
 				g->tri[g->n_tri].tri = q;
-				all[n_bounded] = REF_MAKE(REF_TRI, g->n_tri++);
-				boxes[n_bounded++] = pad_box(tb);
+				if (push_triangle(&rb, REF_MAKE(REF_TRI, g->n_tri++), m->v[ix[0]], m->v[ix[1]], m->v[ix[2]]) < 0)
+					goto oom;
 			}
 			g->n_mesh++;
 			continue;
@@ -990,9 +1079,8 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 				unb[n_unb++] = ref;
 				continue;
 			}
-			bx = pad_box(geom_box_xform(&fwd, sub->bounds));
-			all[n_bounded] = ref;
-			boxes[n_bounded++] = bx;
+			if (refbuf_push(&rb, ref, pad_box(geom_box_xform(&fwd, sub->bounds))) < 0)
+				goto oom;
 			continue;
 		}
 		/* xprim */
@@ -1009,9 +1097,14 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			unb[n_unb++] = ref;
 			continue;
 		}
-		all[n_bounded] = ref;
-		boxes[n_bounded++] = pad_box(bx);
+		if (refbuf_push(&rb, ref, pad_box(bx)) < 0)
+			goto oom;
 	}
+	uint32_t n_bounded = rb.n;
+	all = rb.ref;
+	boxes = rb.box;
+	rb.ref = NULL;
+	rb.box = NULL;
 	g->n_unb = n_unb;
 	g->n_refs = n_bounded;
 	uint32_t *unb_fit = realloc(g->unb, (n_unb ? n_unb : 1) * sizeof *unb_fit);
@@ -1051,6 +1144,8 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 oom:
 	scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
 fail:
+	free(rb.ref);
+	free(rb.box);
 	free(perm);
 	free(all);
 	free(boxes);
