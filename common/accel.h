@@ -1,9 +1,13 @@
 /*
  * accel.h - geometry and acceleration: the scene model's objects turned into
- * intersectable primitives under a BVH (two-level: defined objects are built
- * once and referenced by instances with a transform).
+ * intersectable primitives under a multi-level BVH: each define is built
+ * once into its own BVH and referenced by instances (an inverse transform
+ * and an object index, 52 bytes); defines nest to LIM_DEFINE_DEPTH, CSG to
+ * LIM_CSG_DEPTH (accel_build refuses deeper graphs).
  *
- * Owner of the geometry: common/geom*.c, common/bvh.c, common/accel.c.
+ * Owner of the geometry: common/geom*.c, common/bvh.c, common/csg.c,
+ * common/accel.c. Primitive mappings and normals: the comment at the top of
+ * common/geom.c; the epsilon strategy: common/accel.c.
  * The accel keeps a pointer to the scene; the scene must outlive it.
  */
 #ifndef PORTRAY_ACCEL_H
