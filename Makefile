@@ -43,6 +43,8 @@ FUZZ_REPLAY:= $(patsubst tests/fuzz/%.c,$(BUILD)/tests/%-replay,$(FUZZ_SRC))
 BENCH_BIN  := $(patsubst bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 
 .PHONY: all test bench fuzz install uninstall clean
+# keep test and fuzz objects (chained pattern rules would delete them as intermediates)
+.SECONDARY:
 all: $(MASTER_BIN) $(WORKER_BIN)
 
 $(BUILD)/%.o: %.c
