@@ -99,6 +99,7 @@ struct group {
 	uint32_t n_inst;
 	vec3 *bake;     /* baked vertices and normals (owned) */
 	struct geom_box bounds; /* of the bounded references */
+	vec3 center;    /* node bounds are relative to this point */
 	size_t bytes;
 };
 
@@ -133,20 +134,22 @@ static void trace_init(struct trace *r, vec3 o, vec3 d, double tmin, double tmax
 }
 
 /*
- * BOX TESTS IN FLOAT, KEPT CONSERVATIVE. Node bounds are floats rounded
- * outward, and every item box is padded by BOX_PAD_REL times the largest
- * coordinate magnitude M of its group before the build. The ray is scaled
- * exactly by a power of two so that its largest direction component is in
- * [1, 2) (t scales by the same power), then rounded to float. Errors: the
- * origin's rounding moves it by at most 2^-24 |o|: when |o| <= 2M that is
- * below the padding; when |o| > 2M it is at most 2^-23 of the distance to
- * the box, covered by widening every entry/exit distance by BOX_WIDEN
- * relative (which also covers the rounding of the subtraction, of the
- * inverse and of the product, and of tmin/tmax to float). Zero direction
- * components get an inverse of +-1e30 (never inf, so never inf * 0 = NaN);
- * the padding keeps that exact enough. Primitive tests stay in double, so
- * a box test can only let through more, never cull a true hit: BVH and
- * brute force give the same answers (tests/unit/test_bvh.c checks).
+ * BOX TESTS IN FLOAT, KEPT CONSERVATIVE. Node bounds are floats relative
+ * to the group's centre, rounded outward, and every item box is padded by
+ * BOX_PAD_REL times the largest coordinate magnitude M about that centre
+ * before the build. The ray's origin is taken relative to the centre (in
+ * double), its direction scaled exactly by a power of two so that the
+ * largest component is in [1, 2) (t scales by the same power), then both
+ * are rounded to float. Errors: the origin's rounding moves it by at most
+ * 2^-24 |o|: when |o| <= 2M that is below the padding; when |o| > 2M it is
+ * at most 2^-23 of the distance to the box, covered by widening every
+ * entry/exit distance by BOX_WIDEN relative (which also covers the rounding
+ * of the subtraction, of the inverse and of the product, and of tmin/tmax
+ * to float). Zero direction components get an inverse of +-1e30 (never
+ * inf, so never inf * 0 = NaN); the padding keeps that exact enough.
+ * Primitive tests stay in double, so a box test can only let through more,
+ * never cull a true hit: BVH and brute force give the same answers
+ * (tests/unit/test_bvh.c checks).
  */
 #define BOX_PAD_REL 0x1p-19
 #define BOX_WIDEN 0x1p-20
@@ -169,9 +172,10 @@ static inline double pow2(int e)
 	return x;
 }
 
-static inline void ray4_init(struct ray4 *q, const struct trace *r)
+static inline void ray4_init(struct ray4 *q, const struct trace *r, vec3 center)
 {
-	double o[3] = { r->o.x, r->o.y, r->o.z }, d[3] = { r->d.x, r->d.y, r->d.z };
+	double o[3] = { r->o.x - center.x, r->o.y - center.y, r->o.z - center.z };
+	double d[3] = { r->d.x, r->d.y, r->d.z };
 	double ax = fabs(d[0]), ay = fabs(d[1]), az = fabs(d[2]);
 	double m = ax > ay ? ax : ay;
 	m = m > az ? m : az;
@@ -239,9 +243,10 @@ static inline int node4_hit(const struct bvh4 *nd, const struct ray4 *q, float t
 #define SLAB_WIDEN 4.5e-16 /* 1 + 2 gamma(3) for doubles, rounded up (Ize 2013) */
 
 /* The same test in double on one box of six floats (a root that is a leaf). */
-static bool box_hit(const float b[6], const struct trace *r)
+static bool box_hit(const float b[6], vec3 center, const struct trace *r)
 {
-	double o[3] = { r->o.x, r->o.y, r->o.z }, d[3] = { r->d.x, r->d.y, r->d.z };
+	double o[3] = { r->o.x - center.x, r->o.y - center.y, r->o.z - center.z };
+	double d[3] = { r->d.x, r->d.y, r->d.z };
 	double t0 = r->tmin, t1 = r->tmax;
 	for (int k = 0; k < 3; k++) {
 		double inv = fabs(d[k]) > 1e-300 ? 1.0 / d[k] : copysign(1e300, d[k]);
@@ -536,13 +541,13 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 			if (REF_KIND(g->refs[k]) >= REF_XPRIM)
 				found |= ref_test(A, g, g->refs[k], r, &best, true);
 	} else if (g->bvh.root_n) { /* the root is one leaf */
-		if (box_hit(g->bvh.root_b, r))
+		if (box_hit(g->bvh.root_b, g->center, r))
 			for (uint32_t k = 0; k < g->bvh.root_n; k++)
 				found |= ref_test(A, g, g->refs[g->bvh.root_idx + k], r, &best, false);
 	} else if (g->bvh.n_nodes4) {
 		const struct bvh4 *nodes = g->bvh.nodes;
 		struct ray4 q;
-		ray4_init(&q, r);
+		ray4_init(&q, r, g->center);
 		const float tmin = (float)(r->tmin * q.tscale);
 		float tmax = (float)(r->tmax * q.tscale);
 		struct {
@@ -610,7 +615,7 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 		if (ref_occludes(A, g, g->unb[k], r))
 			return true;
 	if (g->bvh.root_n) {
-		if (box_hit(g->bvh.root_b, r))
+		if (box_hit(g->bvh.root_b, g->center, r))
 			for (uint32_t k = 0; k < g->bvh.root_n; k++)
 				if (ref_occludes(A, g, g->refs[g->bvh.root_idx + k], r))
 					return true;
@@ -620,7 +625,7 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 		return false;
 	const struct bvh4 *nodes = g->bvh.nodes;
 	struct ray4 q;
-	ray4_init(&q, r);
+	ray4_init(&q, r, g->center);
 	const float tmin = (float)(r->tmin * q.tscale), tmax = (float)(r->tmax * q.tscale);
 	struct {
 		uint32_t idx, n;
@@ -1113,8 +1118,16 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	A->st.n_prims += g->n_sph + g->n_tri + g->n_xp;
 
 	/* pass 3: the BVH over the bounded references */
-	double big = 0; /* the group's largest coordinate magnitude: see BOX_PAD_REL */
+	/* node bounds are stored relative to the group's centre, padded by
+	 * BOX_PAD_REL of the largest coordinate magnitude around it */
+	struct geom_box world = geom_box_empty();
+	for (uint32_t k = 0; k < n_bounded; k++)
+		world = geom_box_union(world, boxes[k]);
+	g->center = n_bounded ? v3_scale(v3_add(world.lo, world.hi), 0.5) : v3(0, 0, 0);
+	double big = 0;
 	for (uint32_t k = 0; k < n_bounded; k++) {
+		boxes[k].lo = v3_sub(boxes[k].lo, g->center);
+		boxes[k].hi = v3_sub(boxes[k].hi, g->center);
 		big = fmax(big, fmax(fmax(fabs(boxes[k].lo.x), fabs(boxes[k].lo.y)), fabs(boxes[k].lo.z)));
 		big = fmax(big, fmax(fmax(fabs(boxes[k].hi.x), fabs(boxes[k].hi.y)), fabs(boxes[k].hi.z)));
 	}
@@ -1133,6 +1146,11 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	for (uint32_t k = 0; k < n_bounded; k++) {
 		g->refs[k] = all[perm[k]];
 		g->bounds = geom_box_union(g->bounds, boxes[k]);
+	}
+	if (n_bounded) { /* back to the group's space, covering the padding */
+		g->bounds.lo = v3_add(g->bounds.lo, g->center);
+		g->bounds.hi = v3_add(g->bounds.hi, g->center);
+		g->bounds = pad_box(g->bounds);
 	}
 	g->bytes += (size_t)g->bvh.n_nodes4 * sizeof(struct bvh4) + (size_t)(n_bounded + n_unb) * sizeof(uint32_t);
 	A->st.n_nodes += g->bvh.n_nodes4;

@@ -107,6 +107,85 @@ static void agree(const char *path)
 	scene_free(s);
 }
 
+/* Runs 2 x N_RAYS/2 rays over an accel and checks agreement (as agree()). */
+static void agree_accel(const char *label, const struct accel *a)
+{
+	struct job jobs[2];
+	memset(jobs, 0, sizeof jobs);
+	for (int i = 0; i < 2; i++) {
+		jobs[i].a = a;
+		CHECK(accel_bounds(a, &jobs[i].lo, &jobs[i].hi));
+		jobs[i].seed = rng_seed(3, 5, 8);
+		jobs[i].from = i * N_RAYS / 10;
+		jobs[i].to = (i + 1) * N_RAYS / 10;
+	}
+	run_rays(&jobs[0]);
+	run_rays(&jobs[1]);
+	int mismatch = jobs[0].mismatch + jobs[1].mismatch, hits = jobs[0].hits + jobs[1].hits;
+	printf("%s: %d rays, %d hits, %d mismatches\n", label, 2 * N_RAYS / 10, hits, mismatch);
+	CHECK(mismatch == 0);
+	CHECK(hits > N_RAYS / 100);
+}
+
+/*
+ * Small things far from the origin (float node bounds are relative to the
+ * group's centre), some through instances, some as sliver triangles.
+ */
+static void far_away(void)
+{
+	struct scene *s = scene_new();
+	struct scene_error err;
+	vec3 at = v3(1e5, -2e5, 3e5);
+	uint32_t ids[600];
+	for (int i = 0; i < 600; i++) {
+		struct scene_object o;
+		vec3 p = v3_add(at, v3(rng_uniform(9, 3 * i), rng_uniform(9, 3 * i + 1), rng_uniform(9, 3 * i + 2)));
+		if (i % 3 == 0) {
+			scene_object_defaults(&o, PRIM_SPHERE);
+			o.u.sphere.centre = p;
+			o.u.sphere.radius = 0.01 + 0.02 * rng_uniform(10, i);
+		} else if (i % 3 == 1) {
+			scene_object_defaults(&o, PRIM_TRIANGLE); /* long slivers */
+			o.u.triangle.a = p;
+			o.u.triangle.b = v3_add(p, v3(0.3, 0.2, 0.25));
+			o.u.triangle.c = v3_add(p, v3(0.3, 0.21, 0.25));
+		} else {
+			scene_object_defaults(&o, PRIM_BOX);
+			o.u.box.a = p;
+			o.u.box.b = v3_add(p, v3(0.02, 0.03, 0.01));
+			scene_xform_op(&o.xform, XF_ROTATE, i % 3, 10.0 * i, v3(0, 0, 0)); /* about the origin! */
+			scene_xform_op(&o.xform, XF_ROTATE, i % 3, -10.0 * i, v3(0, 0, 0));
+			o.has_xform = true;
+		}
+		CHECK(scene_add_object(s, &o, &ids[i], &err) == 0);
+	}
+	struct scene_define d;
+	memset(&d, 0, sizeof d);
+	d.name = strdup("cluster");
+	d.n_objects = 200;
+	d.objects = malloc(200 * sizeof *d.objects);
+	memcpy(d.objects, ids, 200 * sizeof *ids);
+	uint32_t did;
+	CHECK(scene_add_define(s, &d, &did, &err) == 0);
+	for (int i = 200; i < 600; i++)
+		CHECK(scene_add_root(s, ids[i], &err) == 0);
+	for (int k = 0; k < 3; k++) {
+		struct scene_object o;
+		scene_object_defaults(&o, PRIM_INSTANCE);
+		o.u.instance.define = did;
+		scene_xform_op(&o.xform, XF_TRANSLATE, 0, 0, v3(0.3 * k, 0, 0));
+		o.has_xform = true;
+		uint32_t id;
+		CHECK(scene_add_object(s, &o, &id, &err) == 0);
+		CHECK(scene_add_root(s, id, &err) == 0);
+	}
+	struct accel *a;
+	CHECK(accel_build(s, &a, &err) == 0);
+	agree_accel("far from the origin", a);
+	accel_free(a);
+	scene_free(s);
+}
+
 /* Builder invariants on random boxes and on boxes with one centroid. */
 static void builder(void)
 {
@@ -168,6 +247,7 @@ static void builder(void)
 int main(void)
 {
 	builder();
+	far_away();
 	static const char *const scenes[] = { "tests/data/spd/balls_s4.sce", "tests/data/spd/gears_s2.sce",
 					      "tests/data/spd/rings_s3.sce", "tests/data/spd/tetra_s4.sce",
 					      "tests/data/meshes/spot.sce" };
