@@ -835,7 +835,7 @@ static int refbuf_push(struct refbuf *b, uint32_t ref, struct geom_box box)
  * referenced by the boxes of its pieces clipped to halves of its box, down
  * to SPLIT_DEPTH levels. The pieces cover the triangle; a ray meeting it
  * through two pieces tests it twice and keeps the one t. */
-#define SPLIT_RATIO 16.0
+#define SPLIT_RATIO 24.0
 #define SPLIT_DEPTH 3
 
 /* Clips convex polygon p (n <= 9 + depth vertices) to the side of the plane
