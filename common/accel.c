@@ -118,9 +118,20 @@ static const uint32_t tri_ix012[3] = { 0, 1, 2 };
 struct trace {
 	vec3 o, d;
 	double inv_dd; /* 1 / |d|^2 */
-	struct geom_wray w;
 	double tmin, tmax;
+	bool w_ready;  /* w is set up (on the first triangle test) */
+	struct geom_wray w;
 };
+
+/* The watertight test's ray set-up, made when a triangle is first tested. */
+static inline const struct geom_wray *trace_wray(struct trace *r)
+{
+	if (!r->w_ready) {
+		geom_wray_init(&r->w, r->o, r->d);
+		r->w_ready = true;
+	}
+	return &r->w;
+}
 
 static void trace_init(struct trace *r, vec3 o, vec3 d, double tmin, double tmax)
 {
@@ -128,7 +139,7 @@ static void trace_init(struct trace *r, vec3 o, vec3 d, double tmin, double tmax
 	r->d = d;
 	double a = v3_dot(d, d);
 	r->inv_dd = a > 0 ? 1.0 / a : 0;
-	geom_wray_init(&r->w, o, d);
+	r->w_ready = false;
 	r->tmin = tmin;
 	r->tmax = tmax;
 }
@@ -399,7 +410,7 @@ static inline __attribute__((always_inline)) bool ref_test(const struct accel *A
 		const struct gmesh *m = &g->mesh[g->tri[i].mesh];
 		const uint32_t *ix = tri_ix(m, g->tri[i].tri);
 		double b1, b2;
-		if (!geom_tri_hit(&r->w, m->v[ix[0]], m->v[ix[1]], m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2))
+		if (!geom_tri_hit(trace_wray(r), m->v[ix[0]], m->v[ix[1]], m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2))
 			return false;
 		c->b1 = b1;
 		c->b2 = b2;
@@ -528,7 +539,7 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 			for (; k < g->n_tri && g->tri[k].mesh == mi; k++) {
 				const uint32_t *ix = tri_ix(m, g->tri[k].tri);
 				double t, b1, b2;
-				if (geom_tri_hit(&r->w, m->v[ix[0]], m->v[ix[1]], m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2)) {
+				if (geom_tri_hit(trace_wray(r), m->v[ix[0]], m->v[ix[1]], m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2)) {
 					best.ref = REF_MAKE(REF_TRI, k);
 					best.t = r->tmax = t;
 					best.b1 = b1;
