@@ -5,19 +5,26 @@
  * members of one define (built ONCE, however many instances use it). Inside
  * a group every object becomes one or more references (32-bit: 2 bits of
  * kind, 30 bits of index) to:
- *   spheres    untransformed spheres, packed (centre, radius, object)
+ *   spheres    untransformed spheres, packed (centre, radius^2, object)
  *   triangles  (mesh slot, triangle): triangles and raw meshes; transformed
  *              ones are baked into the group's space; untransformed raw
- *              meshes use the scene's arrays without a copy
+ *              meshes use the scene's arrays without a copy; sliver
+ *              triangles get several references (early split clipping)
  *   xprims     everything else (transformed spheres, planes, disks,
  *              cylinders, boxes, polygons, CSG nodes): the ray goes into
  *              the object's space through its inverse transform
- *   instances  (inverse transform as 12 floats, define group, object):
- *              56 bytes each, evaluated in double; the instance's geometry is
- *              exactly the inverse of that float matrix, used consistently
- *              for rays, normals and bounds
+ *   instances  (inverse transform as 12 floats, instance object): 52 bytes
+ *              each, evaluated in double; the instance's geometry is exactly
+ *              the inverse of that float matrix, used consistently for rays,
+ *              normals and bounds
  * Unbounded references (planes, CSG with an infinite extent, instances of
- * groups holding those) sit in a list tested for every ray.
+ * groups holding those) sit in a list tested for every ray. The BVH is
+ * binned SAH (bvh.c) collapsed to 4-wide nodes; traversal is iterative with
+ * a fixed stack, nearest child first, and stops at the first hit for
+ * accel_occluded. Instances recurse into their define's group (depth
+ * bounded by LIM_DEFINE_DEPTH); the closest hit is completed (normal, uv,
+ * mp, material) once per group, in the group's space, then carried out
+ * through each instance's transform.
  *
  * Rays are never normalised when they change space, so t is the same in
  * every space and a hit's t is the caller's t.
