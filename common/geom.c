@@ -530,21 +530,20 @@ bool geom_intersect(const struct geom_obj *g, vec3 o, vec3 d, double tmin, doubl
 			if (!cyl_solid(g, o, d, &t0, &t1, &p0, &p1))
 				return false;
 		} else {
-			/* open: side hits between the caps, seen from both sides */
-			if (cyl_side_roots(g, o, d, &t0, &t1) != 1)
-				return false;
-			double c0, c1;
-			int q0, q1;
-			int slab = cyl_slab(g, o, d, &c0, &c1, &q0, &q1);
-			if (slab == 0)
-				return false;
-			bool ok0 = slab == 2 || (t0 >= c0 && t0 <= c1);
-			bool ok1 = slab == 2 || (t1 >= c0 && t1 <= c1);
-			if (ok0 && in_range(t0, tmin, tmax)) {
+			/* open: side hits between the caps, seen from both sides;
+			 * one set of dot products, the caps by the axial coordinate */
+			vec3 a = g->u.cyl.a, oc = v3_sub(o, g->u.cyl.from);
+			double z0 = v3_dot(oc, a), dz = v3_dot(d, a);
+			vec3 op = v3_sub(oc, v3_scale(a, z0)), dp = v3_sub(d, v3_scale(a, dz));
+			double r2 = g->u.cyl.r * g->u.cyl.r;
+			if (v3_dot(dp, dp) <= 1e-30 * v3_dot(d, d) || !sphere_roots(op, dp, r2, &t0, &t1))
+				return false; /* parallel to the axis: only the (open) ends */
+			double za = z0 + t0 * dz, zb = z0 + t1 * dz, h = g->u.cyl.h;
+			if (za >= 0 && za <= h && in_range(t0, tmin, tmax)) {
 				*t = t0, *part = GEOM_PART_MAIN;
 				return true;
 			}
-			if (ok1 && in_range(t1, tmin, tmax)) {
+			if (zb >= 0 && zb <= h && in_range(t1, tmin, tmax)) {
 				*t = t1, *part = GEOM_PART_MAIN;
 				return true;
 			}
