@@ -186,6 +186,140 @@ static void far_away(void)
 	scene_free(s);
 }
 
+/* One random primitive of any simple kind, randomly transformed, at p. */
+static uint32_t random_prim(struct scene *s, uint64_t seed, vec3 p, int kind)
+{
+	struct scene_error err;
+	struct scene_object o;
+	double r = 0.05 + 0.1 * rng_uniform(seed, 1);
+	switch (kind) {
+	case 0:
+		scene_object_defaults(&o, PRIM_SPHERE);
+		o.u.sphere.centre = p;
+		o.u.sphere.radius = r;
+		break;
+	case 1:
+		scene_object_defaults(&o, PRIM_BOX);
+		o.u.box.a = p;
+		o.u.box.b = v3_add(p, v3(r, 2 * r, r * 0.5));
+		break;
+	case 2:
+		scene_object_defaults(&o, PRIM_CYLINDER);
+		o.u.cylinder.from = p;
+		o.u.cylinder.to = v3_add(p, v3(r, 3 * r, -r));
+		o.u.cylinder.radius = r * 0.3;
+		o.u.cylinder.capped = rng_uniform(seed, 2) < 0.5;
+		break;
+	case 3:
+		scene_object_defaults(&o, PRIM_DISK);
+		o.u.plane.position = p;
+		o.u.plane.normal = v3(rng_uniform(seed, 3) - 0.5, 1, rng_uniform(seed, 4) - 0.5);
+		o.u.plane.radius = r;
+		break;
+	case 4: {
+		scene_object_defaults(&o, PRIM_POLYGON);
+		o.u.polygon.n_contours = 2;
+		o.u.polygon.n_points = 8;
+		o.u.polygon.contour_start = malloc(3 * sizeof(uint32_t));
+		o.u.polygon.points = malloc(8 * sizeof(vec3));
+		o.u.polygon.contour_start[0] = 0;
+		o.u.polygon.contour_start[1] = 4;
+		o.u.polygon.contour_start[2] = 8;
+		static const double sq[8][2] = { { 0, 0 }, { 3, 0 }, { 3, 3 }, { 0, 3 }, { 1, 1 }, { 2, 1 }, { 2, 2 }, { 1, 2 } };
+		for (int i = 0; i < 8; i++)
+			o.u.polygon.points[i] = v3_add(p, v3(sq[i][0] * r, sq[i][1] * r, sq[i][0] * r * 0.3));
+		break;
+	}
+	default:
+		scene_object_defaults(&o, PRIM_TRIANGLE);
+		o.u.triangle.a = p;
+		o.u.triangle.b = v3_add(p, v3(2 * r, 0, r));
+		o.u.triangle.c = v3_add(p, v3(0, 2 * r, r));
+		break;
+	}
+	if (rng_uniform(seed, 5) < 0.5) {
+		scene_xform_op(&o.xform, XF_STRETCH, (int)(3 * rng_uniform(seed, 6)), 0.5 + rng_uniform(seed, 7), v3(0, 0, 0));
+		scene_xform_op(&o.xform, XF_ROTATE, (int)(3 * rng_uniform(seed, 8)), 360 * rng_uniform(seed, 9), v3(0, 0, 0));
+		scene_xform_op(&o.xform, XF_TRANSLATE, 0, 0, v3(0.1, -0.2, 0.3));
+		o.has_xform = true;
+	}
+	uint32_t id;
+	if (scene_add_object(s, &o, &id, &err))
+		abort();
+	return id;
+}
+
+/* Every kind, transforms, CSG nodes over them, instances two levels deep and
+ * an infinite plane, mixed in one scene: BVH, brute force and occlusion agree. */
+static void mixed(void)
+{
+	struct scene *s = scene_new();
+	struct scene_error err;
+	uint32_t members[60];
+	for (int i = 0; i < 60; i++) {
+		vec3 p = v3(rng_uniform(11, 3 * i), rng_uniform(11, 3 * i + 1), rng_uniform(11, 3 * i + 2));
+		uint32_t a = random_prim(s, rng_seed(1, i, 0), p, i % 6);
+		if (i % 4 == 0) { /* a CSG node of two overlapping solids */
+			uint32_t b = random_prim(s, rng_seed(2, i, 0), v3_add(p, v3(0.05, 0.05, 0)), (i / 4) % 3);
+			struct scene_object o;
+			scene_object_defaults(&o, PRIM_CSG);
+			o.u.csg.op = (enum csg_op)((i / 4) % 3);
+			o.u.csg.operand1 = a;
+			o.u.csg.operand2 = b;
+			CHECK(scene_add_object(s, &o, &a, &err) == 0);
+		}
+		members[i] = a;
+	}
+	struct scene_define d;
+	memset(&d, 0, sizeof d);
+	d.name = strdup("inner");
+	d.n_objects = 30;
+	d.objects = malloc(30 * sizeof *d.objects);
+	memcpy(d.objects, members, 30 * sizeof *members);
+	uint32_t inner;
+	CHECK(scene_add_define(s, &d, &inner, &err) == 0);
+	uint32_t outer_objs[4];
+	for (int k = 0; k < 4; k++) {
+		struct scene_object o;
+		scene_object_defaults(&o, PRIM_INSTANCE);
+		o.u.instance.define = inner;
+		scene_xform_op(&o.xform, XF_ROTATE, k % 3, 30.0 * k, v3(0, 0, 0));
+		scene_xform_op(&o.xform, XF_TRANSLATE, 0, 0, v3(1.2 * k, 0, 0));
+		o.has_xform = true;
+		CHECK(scene_add_object(s, &o, &outer_objs[k], &err) == 0);
+	}
+	memset(&d, 0, sizeof d);
+	d.name = strdup("outer");
+	d.n_objects = 4;
+	d.objects = malloc(4 * sizeof *d.objects);
+	memcpy(d.objects, outer_objs, sizeof outer_objs);
+	uint32_t outer;
+	CHECK(scene_add_define(s, &d, &outer, &err) == 0);
+	for (int k = 0; k < 3; k++) {
+		struct scene_object o;
+		scene_object_defaults(&o, PRIM_INSTANCE);
+		o.u.instance.define = outer;
+		scene_xform_op(&o.xform, XF_TRANSLATE, 0, 0, v3(0, 1.5 * k, 0.5 * k));
+		o.has_xform = true;
+		uint32_t id;
+		CHECK(scene_add_object(s, &o, &id, &err) == 0);
+		CHECK(scene_add_root(s, id, &err) == 0);
+	}
+	for (int i = 30; i < 60; i++)
+		CHECK(scene_add_root(s, members[i], &err) == 0);
+	struct scene_object pl;
+	scene_object_defaults(&pl, PRIM_PLANE);
+	pl.u.plane.position = v3(0, -0.5, 0);
+	uint32_t pid;
+	CHECK(scene_add_object(s, &pl, &pid, &err) == 0);
+	CHECK(scene_add_root(s, pid, &err) == 0);
+	struct accel *a;
+	CHECK(accel_build(s, &a, &err) == 0);
+	agree_accel("every kind, CSG, nested instances, a plane", a);
+	accel_free(a);
+	scene_free(s);
+}
+
 /* Builder invariants on random boxes and on boxes with one centroid. */
 static void builder(void)
 {
@@ -248,6 +382,7 @@ int main(void)
 {
 	builder();
 	far_away();
+	mixed();
 	static const char *const scenes[] = { "tests/data/spd/balls_s4.sce", "tests/data/spd/gears_s2.sce",
 					      "tests/data/spd/rings_s3.sce", "tests/data/spd/tetra_s4.sce",
 					      "tests/data/meshes/spot.sce" };
