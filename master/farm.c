@@ -246,6 +246,8 @@ struct worker {
 	uint64_t sent_off;     /* scene bytes queued so far */
 	uint32_t *inflight;    /* tile ids in flight on this connection */
 	uint32_t n_inflight;
+	uint32_t cancelled[FARM_DEPTH_MAX]; /* cancelled ids that may still be answered */
+	uint32_t n_cancelled;
 	/* statistics over all connections */
 	uint32_t tiles_done;
 	uint64_t bytes_out, bytes_in, scene_bytes;
@@ -407,6 +409,7 @@ static void worker_lost(struct farm *f, struct worker *w, bool fatal, const char
 		sched_release_locked(&f->s, w->inflight[i], w->index);
 	pthread_mutex_unlock(&f->s.mu);
 	w->n_inflight = 0;
+	w->n_cancelled = 0;
 	if (w->pc) {
 		w->bytes_out += proto_conn_bytes_out(w->pc);
 		w->bytes_in += proto_conn_bytes_in(w->pc);
@@ -496,15 +499,37 @@ static void send_scene(struct farm *f, struct worker *w)
 		w->state = W_BUILDING;
 }
 
+/*
+ * Tells worker w that tile id is done elsewhere: it leaves w's tiles in flight
+ * and joins the ids w may still answer (a tile already being traced is).
+ */
+static void cancel_on(struct worker *w, uint32_t id)
+{
+	for (uint32_t k = 0; k < w->n_inflight; k++) {
+		if (w->inflight[k] != id)
+			continue;
+		w->inflight[k] = w->inflight[--w->n_inflight];
+		if (w->n_cancelled == FARM_DEPTH_MAX) /* forget the oldest */
+			memmove(w->cancelled, w->cancelled + 1, --w->n_cancelled * sizeof *w->cancelled);
+		w->cancelled[w->n_cancelled++] = id;
+		proto_send_cancel(w->pc, id);
+		return;
+	}
+}
+
 /* A TILE_RESULT from w: check it against what was sent, then store it. */
 static void on_result(struct farm *f, struct worker *w, const struct proto_msg *m)
 {
 	const struct proto_tile *t = &m->u.result.tile;
-	uint32_t k;
+	uint32_t k, c = UINT32_MAX;
 	for (k = 0; k < w->n_inflight; k++)
 		if (w->inflight[k] == t->id)
 			break;
-	if (k == w->n_inflight) {
+	if (k == w->n_inflight)
+		for (c = 0; c < w->n_cancelled; c++)
+			if (w->cancelled[c] == t->id)
+				break;
+	if (k == w->n_inflight && c >= w->n_cancelled) {
 		f->invalid_results++;
 		worker_refuse(f, w, PERR_PROTOCOL, "result for tile %u, which is not in flight on this connection", t->id);
 		return;
@@ -521,6 +546,13 @@ static void on_result(struct farm *f, struct worker *w, const struct proto_msg *
 		worker_refuse(f, w, PERR_PROTOCOL, "tile %u failed its checksum", t->id);
 		return;
 	}
+	if (k == w->n_inflight) { /* answered after its CANCEL: someone else was first */
+		w->cancelled[c] = w->cancelled[--w->n_cancelled];
+		pthread_mutex_lock(&f->s.mu);
+		f->s.dup_wasted++;
+		pthread_mutex_unlock(&f->s.mu);
+		return;
+	}
 	w->inflight[k] = w->inflight[--w->n_inflight];
 	pthread_mutex_lock(&f->s.mu);
 	/* the other holder (if remote) may stop working on it */
@@ -531,7 +563,7 @@ static void on_result(struct farm *f, struct worker *w, const struct proto_msg *
 	if (used) {
 		w->tiles_done++;
 		if (other < f->n_w && f->w[other].state == W_READY)
-			proto_send_cancel(f->w[other].pc, t->id);
+			cancel_on(&f->w[other], t->id);
 	}
 }
 

@@ -597,6 +597,18 @@ static void on_data(struct wk_conn *c, const struct proto_msg *m)
 	size_t len = c->scene_len;
 	c->scene = NULL;
 	c->scene_cap = 0;
+	/* another connection may have brought the same scene meanwhile: share it */
+	bool exact;
+	pthread_mutex_lock(&pool.mu);
+	struct wk_entry *same = cache_find(c->hash, c->w, c->h, &exact);
+	if (same && exact)
+		same->refs++;
+	pthread_mutex_unlock(&pool.mu);
+	if (same && exact) {
+		free(bytes);
+		use_entry(c, same);
+		return;
+	}
 	struct wk_entry *e = entry_new(c, bytes, len);
 	if (!e) {
 		conn_fail(c, PERR_INTERNAL, "out of memory");
@@ -914,10 +926,12 @@ static void tick(void)
 		} else if (!drop && c->state == ST_CLOSING && proto_conn_outq(c->pc) == 0) {
 			drop = true;
 		}
-		if (drop)
+		if (drop) {
 			conn_close(i);
-		else
+			cache_trim(&pool.mu); /* entries it used may be over the budget now */
+		} else {
 			i++;
+		}
 	}
 }
 

@@ -1,0 +1,68 @@
+#!/bin/sh
+# bench/farm.sh - the farm's figures (make bench):
+#  1. parallel efficiency: master + 2 workers (-j 1 each, --no-local) against
+#     a local -j 2 render of balls_s4 at 1280x960 (target >= 90%);
+#  2. master overhead: 1x1 tiles through 32 simulated workers (32 connections
+#     to a worker that answers every tile at once with black pixels): tiles/s;
+#  3. bytes on the wire per job (scene, tiles; a cache hit moves no scene).
+# Processes on 127.0.0.1 with OS-chosen ports, all killed on exit.
+BIN=${BIN:-bin}
+SCENE=${SCENE:-tests/data/spd/balls_s4.sce}
+SIZE=${SIZE:-1280x960}
+T=$(mktemp -d "${TMPDIR:-/tmp}/portray-bench.XXXXXX")
+PIDS=""
+trap 'for p in $PIDS; do kill $p 2>/dev/null; done; wait 2>/dev/null; [ -n "${KEEP:-}" ] || rm -rf "$T"' EXIT
+now() { date +%s.%N; }
+start_worker() { # name, options: sets NAME_PORT
+	n=$1
+	shift
+	"$BIN/portray-worker" --listen 127.0.0.1:0 --port-file "$T/$n.port" "$@" >/dev/null 2>"$T/$n.log" &
+	PIDS="$PIDS $!"
+	i=0
+	while [ ! -s "$T/$n.port" ] && [ $i -lt 100 ]; do
+		sleep 0.05
+		i=$((i + 1))
+	done
+	eval "${n}_PORT=$(cat "$T/$n.port")"
+}
+
+start_worker a -j 1
+start_worker b -j 1
+P1=$a_PORT
+P2=$b_PORT
+W=127.0.0.1:$P1,127.0.0.1:$P2
+# warm the workers' caches and the page cache, so both runs compare tracing
+"$BIN/portray-master" "$SCENE" --size 64x48 -o "$T/warm.ppm" -w "$W" --no-local -q || exit 1
+
+t0=$(now)
+"$BIN/portray-master" "$SCENE" --size "$SIZE" -o "$T/local.ppm" -j 2 -q || exit 1
+t1=$(now)
+"$BIN/portray-master" "$SCENE" --size "$SIZE" -o "$T/farm.ppm" -w "$W" --no-local 2>"$T/farm.log" || exit 1
+t2=$(now)
+same=differs
+cmp -s "$T/local.ppm" "$T/farm.ppm" && same=identical
+awk -v a="$t0" -v b="$t1" -v c="$t2" -v s="$SIZE" -v same="$same" 'BEGIN {
+	tl = b - a; tf = c - b;
+	printf "farm efficiency: %s at %s: local -j 2 %.2f s, master + 2 workers (-j 1, --no-local) %.2f s: %.0f%% (target >= 90%%), image %s\n",
+	       "balls_s4", s, tl, tf, 100 * tl / tf, same }'
+grep "farm: bytes sent" "$T/farm.log" | sed 's/^portray-master: /  /'
+awk '/received/ { for (i = 1; i <= NF; i++) if ($i == "received") r += $(i + 1) } END { printf "  bytes received (tile results) %d\n", r }' "$T/farm.log"
+
+# master overhead: 32 connections to a black-tile worker, 1x1 tiles
+start_worker black -j 1 --test-fault black
+PB=$black_PORT
+L=""
+for i in $(seq 32); do L="$L${L:+,}127.0.0.1:$PB"; done
+OS=${OVERHEAD_SIZE:-320x240}
+t0=$(now)
+"$BIN/portray-master" "$SCENE" --size "$OS" --tile 1 -o "$T/black.ppm" -w "$L" --no-local 2>"$T/m_black.log" || exit 1
+t1=$(now)
+awk -v a="$t0" -v b="$t1" -v s="$OS" 'BEGIN {
+	split(s, d, "x"); n = d[1] * d[2];
+	printf "master overhead: %d 1x1 tiles through 32 simulated workers in %.2f s: %.0f tiles/s (including 32 handshakes and scene offers)\n", n, b - a, n / (b - a) }'
+grep "farm: bytes sent" "$T/m_black.log" | sed 's/^portray-master: /  /'
+
+# bytes per job, scene cached: a second job
+"$BIN/portray-master" "$SCENE" --size 320x240 -o "$T/c.ppm" -w "127.0.0.1:$P1" --no-local 2>"$T/c.log" || exit 1
+printf 'bytes per job at 320x240 on one worker with the scene cached: '
+sed -n 's/.*sent \([0-9]*\) B (scene \([0-9]*\) B, cache \([a-z]*\)).*received \([0-9]*\) B.*/sent \1 (scene \2, cache \3), received \4/p' "$T/c.log"
