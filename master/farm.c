@@ -253,9 +253,9 @@ struct worker {
 	uint64_t bytes_out, bytes_in, scene_bytes;
 	bool cache_hit;
 	int connections;
-	double first_tile_at, rate_t0;
+	double rate_t0;
 	uint32_t rate_n0;
-	double rate;           /* tiles/s, smoothed */
+	double rate;           /* tiles/s over the last second */
 };
 
 struct farm {
@@ -722,13 +722,15 @@ static void progress(struct farm *f, bool force)
 	else if (done == n)
 		snprintf(eta, sizeof eta, "0s");
 	char line[512];
-	int len = snprintf(line, sizeof line, "farm %u/%u tiles %3.0f%% ETA %s | local %u", done, n,
-			   100.0 * done / n, eta, f->s.local_done);
+	int len = snprintf(line, sizeof line, "farm %u/%u tiles %3.0f%% ETA %s | local %.1f t/s", done, n,
+			   100.0 * done / n, eta, el > 0 ? f->s.local_done / el : 0.0);
 	for (uint32_t i = 0; i < f->n_w && len < (int)sizeof line - 40; i++) {
 		struct worker *w = &f->w[i];
+		/* a recent rate: tiles over the last second or so */
 		double dt = now - w->rate_t0;
-		if (dt >= 1.0) {
-			w->rate = (w->tiles_done - w->rate_n0) / dt;
+		if (dt >= 1.0 || w->rate_t0 == 0) {
+			if (w->rate_t0 > 0)
+				w->rate = (w->tiles_done - w->rate_n0) / dt;
 			w->rate_t0 = now;
 			w->rate_n0 = w->tiles_done;
 		}

@@ -234,15 +234,19 @@ static void build_entry(struct wk_entry *e)
 		snprintf(e->error, sizeof e->error, "image size %ux%u refused", e->w, e->h);
 		goto fail;
 	}
+	pthread_mutex_lock(&pool.mu); /* the event loop reads state under the lock */
 	e->scene = s;
 	e->r = r;
 	e->build_ms = (uint32_t)((net_now() - t0) * 1000);
 	e->state = 1;
+	pthread_mutex_unlock(&pool.mu);
 	return;
 fail:
 	renderer_free(r);
 	scene_free(s);
+	pthread_mutex_lock(&pool.mu);
 	e->state = -1;
+	pthread_mutex_unlock(&pool.mu);
 }
 
 /* Tracer thread: builds first (they unblock whole jobs), then tiles round-robin. */
@@ -512,11 +516,14 @@ static struct wk_entry *entry_new(struct wk_conn *c, uint8_t *bytes, size_t len)
 static void use_entry(struct wk_conn *c, struct wk_entry *e)
 {
 	c->entry = e;
-	e->last_used = net_now();
 	c->state = ST_BUILD;
-	if (e->state == 1)
+	pthread_mutex_lock(&pool.mu);
+	e->last_used = net_now();
+	int state = e->state;
+	pthread_mutex_unlock(&pool.mu);
+	if (state == 1)
 		job_start(c);
-	else if (e->state < 0)
+	else if (state < 0)
 		conn_fail(c, PERR_SCENE, "scene rejected: %s", e->error);
 }
 
@@ -829,8 +836,7 @@ static void drain_done(void)
 				if (c->state == ST_BUILD && c->entry == d->entry)
 					use_entry(c, d->entry);
 			}
-			if (d->entry->state < 0) /* failed builds leave the cache */
-				cache_trim(&pool.mu);
+			cache_trim(&pool.mu); /* failed builds leave the cache */
 		} else {
 			struct wk_conn *c = d->job->conn;
 			if (c && c->state == ST_READY) {
@@ -1121,6 +1127,7 @@ int main(int argc, char **argv)
 	}
 	wk_log("shutting down (%zu connections)", n_conns);
 	for (size_t i = 0; i < n_conns; i++) {
+		job_log(conns[i], "cut off: worker shutting down");
 		proto_send_error(conns[i]->pc, PERR_SHUTDOWN, "worker shutting down");
 		proto_conn_flush(conns[i]->pc);
 	}
