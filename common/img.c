@@ -758,6 +758,18 @@ static int write_all(int fd, const uint8_t *p, size_t n)
 	return 0;
 }
 
+/* Writes the encoded PNG (data, n) or, when data is NULL, the PPM header
+ * (head, hn) and the pixels. 0 or -1 with errno. */
+static int write_image(int fd, const uint8_t *data, size_t n, const char *head, int hn, const uint8_t *rgb,
+		       uint32_t w, uint32_t h)
+{
+	if (data)
+		return write_all(fd, data, n);
+	if (write_all(fd, (const uint8_t *)head, (size_t)hn) < 0)
+		return -1;
+	return write_all(fd, rgb, 3 * (size_t)w * h);
+}
+
 /* Case-insensitive "ends with .png". */
 static int is_png_name(const char *path)
 {
@@ -771,7 +783,9 @@ static int is_png_name(const char *path)
  * "<path>.tmp.<pid>.<n>" in the same directory (created with mode 0666 less
  * the umask), are fsync'd, and the file is renamed over path, so path holds
  * either its old content or the whole new image. On failure the temporary
- * file is removed and -1 is returned with errno set.
+ * file is removed and -1 is returned with errno set. A path that exists and
+ * is not a regular file (a device such as /dev/null, a FIFO) is written in
+ * place instead: renaming over it would replace the device or pipe itself.
  */
 int img_write(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h)
 {
@@ -790,6 +804,18 @@ int img_write(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h)
 			return -1;
 	} else {
 		hn = snprintf(head, sizeof head, "P6\n%u %u\n255\n", (unsigned)w, (unsigned)h);
+	}
+
+	struct stat st;
+	if (stat(path, &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) {
+		int fd = open(path, O_WRONLY | O_CLOEXEC);
+		int rc = fd < 0 ? -1 : write_image(fd, data, n, head, hn, rgb, w, h);
+		int e = errno;
+		if (fd >= 0 && close(fd) < 0 && rc == 0)
+			e = errno, rc = -1;
+		free(data);
+		errno = e;
+		return rc;
 	}
 
 	size_t plen = strlen(path);
@@ -814,14 +840,7 @@ int img_write(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h)
 		errno = e;
 		return -1;
 	}
-	int rc;
-	if (data)
-		rc = write_all(fd, data, n);
-	else
-		rc = write_all(fd, (const uint8_t *)head, (size_t)hn) < 0 ||
-				     write_all(fd, rgb, 3 * (size_t)w * h) < 0
-			     ? -1
-			     : 0;
+	int rc = write_image(fd, data, n, head, hn, rgb, w, h);
 	if (rc == 0)
 		rc = fsync(fd);
 	if (close(fd) < 0 && rc == 0)

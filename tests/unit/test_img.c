@@ -13,7 +13,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "common/img.h"
@@ -414,6 +416,59 @@ static void test_files(void)
 	free(img);
 }
 
+/*
+ * An output that exists and is not a regular file (a FIFO here; /dev/null or
+ * /dev/stdout in use) is written in place: renaming a temporary over it would
+ * replace the device or pipe with a plain file (as root, /dev/null itself).
+ */
+static void test_special_output(void)
+{
+	char dir[] = "/tmp/test_img_fifo_XXXXXX";
+	if (!mkdtemp(dir)) {
+		CHECK(0);
+		return;
+	}
+	char path[256];
+	snprintf(path, sizeof path, "%s/out.ppm", dir);
+	if (mkfifo(path, 0600) != 0) {
+		CHECK(0);
+		rmdir(dir);
+		return;
+	}
+	int pfd[2];
+	CHECK(pipe(pfd) == 0);
+	pid_t pid = fork();
+	if (pid == 0) { /* reader: counts the bytes that come through the FIFO */
+		close(pfd[0]);
+		FILE *f = fopen(path, "rb");
+		long k = 0;
+		while (f && fgetc(f) != EOF)
+			k++;
+		(void)!write(pfd[1], &k, sizeof k);
+		_exit(0);
+	}
+	close(pfd[1]);
+	uint8_t *img = make_image(P_FLAT, 4, 3);
+	int rc = img_write(path, img, 4, 3);
+	struct stat st;
+	int still_fifo = lstat(path, &st) == 0 && S_ISFIFO(st.st_mode);
+	CHECK(rc == 0);
+	CHECK(still_fifo);
+	long got = -1;
+	if (still_fifo && rc == 0) {
+		CHECK(read(pfd[0], &got, sizeof got) == (ssize_t)sizeof got);
+		CHECK(got == (long)strlen("P6\n4 3\n255\n") + 4 * 3 * 3);
+	} else {
+		kill(pid, SIGKILL);
+	}
+	waitpid(pid, NULL, 0);
+	close(pfd[0]);
+	CHECK(count_tmp_files(dir) == 0);
+	unlink(path);
+	CHECK(rmdir(dir) == 0);
+	free(img);
+}
+
 /* Writes sample PNGs and their pixels for tests/cli/png_python.sh. */
 static int write_samples(const char *dir)
 {
@@ -448,5 +503,6 @@ int main(int argc, char **argv)
 	test_decoder();
 	test_png_roundtrips();
 	test_files();
+	test_special_output();
 	TEST_MAIN_END();
 }
