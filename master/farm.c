@@ -690,8 +690,6 @@ static void worker_input(struct farm *f, struct worker *w)
 			worker_lost(f, w, false, "%s", why);
 		return;
 	}
-	if (r > 0)
-		w->last_rx = net_now();
 	struct proto_msg m;
 	int code;
 	while (w->pc) {
@@ -702,6 +700,7 @@ static void worker_input(struct farm *f, struct worker *w)
 			worker_refuse(f, w, code, "%s", why);
 			return;
 		}
+		w->last_rx = net_now(); /* whole frames only: trickled bytes are no heartbeat */
 		on_message(f, w, &m);
 	}
 }

@@ -705,7 +705,7 @@ static void on_message(struct wk_conn *c, const struct proto_msg *m)
 		return;
 	}
 	if (m->type == MSG_HEARTBEAT)
-		return; /* the master is alive: last_rx already updated */
+		return; /* the master is alive: last_rx is updated per frame */
 	switch (c->state) {
 	case ST_HELLO: {
 		if (m->type != MSG_HELLO)
@@ -801,8 +801,6 @@ static int conn_input(struct wk_conn *c)
 		}
 		return -1;
 	}
-	if (r > 0)
-		c->last_rx = net_now();
 	struct proto_msg m;
 	int code;
 	while (c->state != ST_CLOSING) {
@@ -813,6 +811,9 @@ static int conn_input(struct wk_conn *c)
 			conn_fail(c, code, "%s", why);
 			break;
 		}
+		/* only whole frames count as a sign of life: a peer trickling
+		 * bytes of a frame it never finishes still times out */
+		c->last_rx = net_now();
 		on_message(c, &m);
 	}
 	return 0;
