@@ -6,8 +6,8 @@
 #   make install      PREFIX=/usr/local DESTDIR=
 #   make SAN=address,undefined test   sanitizer build (objects under build/san)
 CC      ?= cc
-OPT     ?= -O2
-CSTD    := -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE
+OPT     ?= -O3
+CSTD    := -std=c11 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE -ffp-contract=off
 WARN    := -Wall -Wextra -Wshadow -Wmissing-prototypes -Wstrict-prototypes
 CFLAGS  ?= $(OPT) -g
 ALL_CFLAGS = $(CSTD) $(WARN) $(CFLAGS) -I. -MMD -MP -pthread
