@@ -35,7 +35,7 @@
 
 /* connections served at once: each costs a frame buffer (up to 4 MiB) */
 #define WK_MAX_CONNS 256
-/* seconds a peer may take from connect to a ready job, and per frame */
+/* seconds a peer may take from connect to its scene offer */
 #define WK_HANDSHAKE_S 10.0
 /* a master that sends nothing for this long (it heartbeats) is gone */
 #define WK_IDLE_MIN_S 30.0
@@ -907,9 +907,11 @@ static void tick(void)
 		bool drop = false;
 		if (c->state == ST_CLOSING) {
 			drop = proto_conn_outq(c->pc) == 0 || now > c->deadline;
-		} else if (c->state < ST_BUILD && now > c->deadline) {
+		} else if (c->state < ST_RECV && now > c->deadline) {
 			conn_fail(c, PERR_TIMEOUT, "handshake took longer than %.0f s", WK_HANDSHAKE_S);
-		} else if (c->state >= ST_BUILD) {
+		} else if (c->state >= ST_OFFER) {
+			/* heartbeats from the offer on: a long scene transfer or build
+			 * must not look like a dead worker to the master */
 			double idle = 6 * c->hb_interval + 5;
 			if (idle < WK_IDLE_MIN_S)
 				idle = WK_IDLE_MIN_S;
