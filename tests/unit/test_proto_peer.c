@@ -1,0 +1,246 @@
+/*
+ * test_proto_peer.c - a real portray-worker (bin/portray-worker, started
+ * here on an OS-chosen port) against hostile and broken peers speaking raw
+ * frames: each gets an ERROR with the right code and is closed, and the
+ * worker goes on serving; then a whole job over the raw protocol returns the
+ * same pixels as the local renderer; SIGTERM ends the worker with status 0.
+ */
+#include <errno.h>
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "check.h"
+#include "common/render.h"
+#include "proto/net.h"
+#include "proto/proto.h"
+#include "proto/serial.h"
+#include "scene_fixture.h"
+
+static char port[16];
+
+static struct proto_conn *dial(void)
+{
+	char err[300];
+	int fd = net_connect_start("127.0.0.1", port, err, sizeof err);
+	if (fd < 0)
+		return NULL;
+	struct pollfd p = { fd, POLLOUT, 0 };
+	poll(&p, 1, 2000);
+	if (net_connect_finish(fd, err, sizeof err) < 0) {
+		close(fd);
+		return NULL;
+	}
+	return proto_conn_new(fd);
+}
+
+/* Next message within 5 s: 1, or 0 on EOF/timeout/garbage. */
+static int next_msg(struct proto_conn *c, struct proto_msg *m)
+{
+	double until = net_now() + 5;
+	for (;;) {
+		int code;
+		const char *why;
+		int k = proto_conn_next(c, m, &code, &why);
+		if (k != 0)
+			return k > 0;
+		proto_conn_flush(c);
+		struct pollfd p = { proto_conn_fd(c), POLLIN, 0 };
+		if (net_now() > until || poll(&p, 1, 100) < 0)
+			return 0;
+		if (proto_conn_read(c, &why) < 0)
+			return 0;
+	}
+}
+
+/* The next message that is not a HEARTBEAT. */
+static int next_real(struct proto_conn *c, struct proto_msg *m)
+{
+	while (next_msg(c, m))
+		if (m->type != MSG_HEARTBEAT)
+			return 1;
+	return 0;
+}
+
+/* Expects an ERROR with code, then EOF. */
+static int expect_error(struct proto_conn *c, int code, const char *text)
+{
+	struct proto_msg m;
+	int ok = next_real(c, &m) && m.type == MSG_ERROR && m.u.error.code == code &&
+		 (!text || strstr(m.u.error.text, text));
+	if (!ok)
+		fprintf(stderr, "expected error %d '%s', got type %d code %d '%s'\n", code, text ? text : "",
+			m.type, m.type == MSG_ERROR ? m.u.error.code : 0, m.type == MSG_ERROR ? m.u.error.text : "");
+	ok = ok && !next_real(c, &m); /* then closed */
+	return ok;
+}
+
+static struct proto_conn *hello(uint8_t role, uint32_t version)
+{
+	struct proto_conn *c = dial();
+	if (!c)
+		return NULL;
+	struct proto_msg m;
+	if (!next_real(c, &m) || m.type != MSG_HELLO) {
+		proto_conn_free(c);
+		return NULL;
+	}
+	struct proto_hello h;
+	memset(&h, 0, sizeof h);
+	h.version = version;
+	h.role = role;
+	h.heartbeat_ms = 200;
+	snprintf(h.build, sizeof h.build, "%s", proto_build_id());
+	proto_send_hello(c, &h);
+	proto_conn_flush(c);
+	return c;
+}
+
+int main(void)
+{
+	signal(SIGPIPE, SIG_IGN);
+	char pf[] = "/tmp/portray-peer-XXXXXX";
+	int pfd = mkstemp(pf);
+	close(pfd);
+	unlink(pf);
+	pid_t pid = fork();
+	if (pid == 0) {
+		int null = open("/dev/null", O_WRONLY);
+		dup2(null, 2);
+		execl("bin/portray-worker", "portray-worker", "--listen", "127.0.0.1:0", "--port-file", pf, "-j", "2",
+		      "--cache-mb", "1", (char *)NULL);
+		_exit(127);
+	}
+	for (int i = 0; i < 200; i++) {
+		FILE *f = fopen(pf, "r");
+		if (f) {
+			int ok = fscanf(f, "%15s", port) == 1;
+			fclose(f);
+			if (ok)
+				break;
+		}
+		usleep(20000);
+	}
+	CHECK(port[0] != 0);
+	if (!port[0]) {
+		kill(pid, SIGKILL);
+		TEST_MAIN_END();
+	}
+
+	/* garbage instead of a frame */
+	struct proto_conn *c = dial();
+	CHECK(c != NULL);
+	CHECK(send(proto_conn_fd(c), "GET / HTTP/1.0\r\n\r\n", 18, 0) == 18);
+	struct proto_msg m;
+	CHECK(next_real(c, &m) && m.type == MSG_HELLO); /* the worker speaks first */
+	CHECK(expect_error(c, PERR_PROTOCOL, "magic"));
+	proto_conn_free(c);
+
+	/* a frame longer than the limit */
+	c = dial();
+	uint8_t hdr[12];
+	proto_wr32(hdr, PROTO_MAGIC), proto_wr16(hdr + 4, 1), proto_wr16(hdr + 6, MSG_HELLO);
+	proto_wr32(hdr + 8, LIM_FRAME_PAYLOAD + 1);
+	CHECK(send(proto_conn_fd(c), hdr, 12, 0) == 12);
+	CHECK(next_real(c, &m) && m.type == MSG_HELLO);
+	CHECK(expect_error(c, PERR_LIMIT, NULL));
+	proto_conn_free(c);
+
+	/* a master that is not one, another version, a message out of turn */
+	c = hello(ROLE_WORKER, PROTO_VERSION);
+	CHECK(c && expect_error(c, PERR_PROTOCOL, "not a master"));
+	proto_conn_free(c);
+	c = hello(ROLE_MASTER, PROTO_VERSION + 7);
+	CHECK(c && expect_error(c, PERR_VERSION, "master speaks version 8, worker speaks 1"));
+	proto_conn_free(c);
+	c = hello(ROLE_MASTER, PROTO_VERSION);
+	struct proto_tile t0 = { 1, 0, 0, 8, 8 };
+	proto_send_tile(c, &t0);
+	proto_conn_flush(c);
+	CHECK(c && expect_error(c, PERR_PROTOCOL, "unexpected TILE"));
+	proto_conn_free(c);
+
+	/* a scene over the cache budget (1 MiB here) */
+	uint8_t hash[32] = { 1 };
+	c = hello(ROLE_MASTER, PROTO_VERSION);
+	proto_send_offer(c, hash, 2u << 20, 64, 48);
+	CHECK(c && expect_error(c, PERR_LIMIT, "--cache-mb"));
+	proto_conn_free(c);
+
+	/* scene bytes that do not match their hash; chunks out of order */
+	struct scene *s = fx_scene();
+	uint8_t *enc;
+	size_t len;
+	CHECK(proto_scene_encode(s, &enc, &len) == 0);
+	c = hello(ROLE_MASTER, PROTO_VERSION);
+	proto_send_offer(c, hash, len, 64, 48);
+	CHECK(next_real(c, &m) && m.type == MSG_SCENE_NEED);
+	proto_send_data(c, 0, enc, (uint32_t)len);
+	CHECK(expect_error(c, PERR_SCENE, "hash"));
+	proto_conn_free(c);
+	uint8_t real[32];
+	proto_scene_hash(enc, len, real);
+	c = hello(ROLE_MASTER, PROTO_VERSION);
+	proto_send_offer(c, real, len, 64, 48);
+	CHECK(next_real(c, &m) && m.type == MSG_SCENE_NEED);
+	proto_send_data(c, 10, enc + 10, 100);
+	CHECK(expect_error(c, PERR_PROTOCOL, "out of order"));
+	proto_conn_free(c);
+
+	/* a whole job: the pixels equal the local renderer's */
+	c = hello(ROLE_MASTER, PROTO_VERSION);
+	proto_send_offer(c, real, len, 64, 48);
+	CHECK(next_real(c, &m) && m.type == MSG_SCENE_NEED);
+	for (size_t off = 0; off < len; off += 1000)
+		proto_send_data(c, off, enc + off, (uint32_t)(len - off < 1000 ? len - off : 1000));
+	CHECK(next_real(c, &m) && m.type == MSG_SCENE_READY && !m.u.ready.cached);
+	struct renderer *r = NULL;
+	struct scene_error err;
+	CHECK(renderer_new(s, &r, &err) == 0);
+	struct proto_tile tiles[3] = { { 7, 0, 0, 16, 16 }, { 8, 48, 40, 16, 8 }, { 9, 10, 20, 5, 3 } };
+	for (int i = 0; i < 3; i++)
+		proto_send_tile(c, &tiles[i]);
+	int got = 0, same = 0;
+	while (got < 3 && next_real(c, &m) && m.type == MSG_TILE_RESULT) {
+		const struct proto_tile *t = &m.u.result.tile;
+		uint8_t px[16 * 16 * 3];
+		struct tile_rect rect = { t->x, t->y, t->w, t->h };
+		renderer_tile(r, rect, px);
+		size_t n = (size_t)t->w * t->h * 3;
+		same += t->id >= 7 && t->id <= 9 && memcmp(px, m.u.result.pixels, n) == 0 &&
+			proto_crc32(0, px, n) == m.u.result.crc;
+		got++;
+	}
+	CHECK(got == 3 && same == 3);
+	/* a tile outside the image ends the job with an error */
+	struct proto_tile out = { 10, 60, 40, 8, 8 };
+	proto_send_tile(c, &out);
+	CHECK(expect_error(c, PERR_PROTOCOL, "outside"));
+	proto_conn_free(c);
+
+	/* the same scene again: a cache hit, no bytes */
+	c = hello(ROLE_MASTER, PROTO_VERSION);
+	proto_send_offer(c, real, len, 64, 48);
+	CHECK(next_real(c, &m) && m.type == MSG_SCENE_HAVE);
+	CHECK(next_real(c, &m) && m.type == MSG_SCENE_READY && m.u.ready.cached);
+	proto_send_bye(c);
+	proto_conn_flush(c);
+	CHECK(!next_real(c, &m)); /* BYE: the worker closes */
+	proto_conn_free(c);
+
+	renderer_free(r);
+	free(enc);
+	scene_free(s);
+	kill(pid, SIGTERM);
+	int st = -1;
+	waitpid(pid, &st, 0);
+	CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+	unlink(pf);
+	TEST_MAIN_END();
+}
