@@ -3,6 +3,7 @@
  */
 #include "common/scene.h"
 
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -107,17 +108,17 @@ void scene_material_defaults(struct scene_material *m)
 	scene_shader_defaults(&m->shader, SHADER_NONE);
 }
 
+static struct scene_material default_material;
+static pthread_once_t default_material_once = PTHREAD_ONCE_INIT;
+
+static void default_material_init(void) { scene_material_defaults(&default_material); }
+
+/* Render threads call this at once: pthread_once, not an unsynchronised
+ * "initialised" flag (a data race, even if every thread wrote the same bytes). */
 const struct scene_material *scene_default_material(void)
 {
-	static struct scene_material def;
-	static int init;
-	if (!init) { /* idempotent: every thread would write the same bytes */
-		struct scene_material m;
-		scene_material_defaults(&m);
-		def = m;
-		init = 1;
-	}
-	return &def;
+	pthread_once(&default_material_once, default_material_init);
+	return &default_material;
 }
 
 void scene_object_defaults(struct scene_object *o, enum prim_kind kind)
@@ -587,8 +588,18 @@ uint32_t scene_find_define(const struct scene *s, const char *name)
 
 /* ---- statistics and names ------------------------------------------------------- */
 
-/* Triangles drawn by object i, through instances; memo caches per-define counts. */
-static uint64_t object_tris(const struct scene *s, uint32_t i, uint64_t *memo)
+/* a + b, saturating at UINT64_MAX: nested instances multiply counts quickly */
+static uint64_t sat_add(uint64_t a, uint64_t b) { return a > UINT64_MAX - b ? UINT64_MAX : a + b; }
+
+/* Per define: its triangle count once known (for object_tris). */
+struct tri_memo {
+	uint64_t n;
+	bool known;
+};
+
+/* Triangles drawn by object i, through instances (saturating at UINT64_MAX);
+ * memo caches per-define counts. */
+static uint64_t object_tris(const struct scene *s, uint32_t i, struct tri_memo *memo)
 {
 	const struct scene_object *o = &s->objects[i];
 	switch (o->kind) {
@@ -597,16 +608,17 @@ static uint64_t object_tris(const struct scene *s, uint32_t i, uint64_t *memo)
 	case PRIM_RAW:
 		return s->meshes[o->u.raw.mesh].n_triangles;
 	case PRIM_CSG:
-		return object_tris(s, o->u.csg.operand1, memo) + object_tris(s, o->u.csg.operand2, memo);
+		return sat_add(object_tris(s, o->u.csg.operand1, memo), object_tris(s, o->u.csg.operand2, memo));
 	case PRIM_INSTANCE: {
 		uint32_t d = o->u.instance.define;
-		if (memo[d] == UINT64_MAX) {
+		if (!memo[d].known) {
 			uint64_t n = 0;
 			for (uint32_t k = 0; k < s->defines[d].n_objects; k++)
-				n += object_tris(s, s->defines[d].objects[k], memo);
-			memo[d] = n;
+				n = sat_add(n, object_tris(s, s->defines[d].objects[k], memo));
+			memo[d].n = n;
+			memo[d].known = true;
 		}
-		return memo[d];
+		return memo[d].n;
 	}
 	default:
 		return 0;
@@ -627,12 +639,10 @@ void scene_stats(const struct scene *s, struct scene_stats *st)
 		else
 			st->materials_anon++;
 	}
-	uint64_t *memo = malloc((s->n_defines ? s->n_defines : 1) * sizeof *memo);
+	struct tri_memo *memo = calloc(s->n_defines ? s->n_defines : 1, sizeof *memo);
 	if (memo) {
-		for (uint32_t i = 0; i < s->n_defines; i++)
-			memo[i] = UINT64_MAX;
 		for (uint32_t i = 0; i < s->n_roots; i++)
-			st->triangles_instanced += object_tris(s, s->roots[i], memo);
+			st->triangles_instanced = sat_add(st->triangles_instanced, object_tris(s, s->roots[i], memo));
 		free(memo);
 	}
 }

@@ -2,6 +2,8 @@
  * test_scene.c - the scene model: defaults, builder validation, ownership,
  * transform composition and rotation sense.
  */
+#include <pthread.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -184,11 +186,76 @@ static void test_mesh_stats(void)
 	scene_free(s);
 }
 
+/*
+ * Triangles drawn through instances saturate instead of wrapping: 64 levels
+ * of defines, each drawing the one below twice, draw 2^64 triangles; 128
+ * levels must not take 2^64 steps either (a saturated count stays known).
+ */
+static void test_stats_saturate(void)
+{
+	struct scene *s = scene_new();
+	struct scene_error err;
+	struct scene_object o;
+	uint32_t obj, def;
+	scene_object_defaults(&o, PRIM_TRIANGLE);
+	CHECK(scene_add_object(s, &o, &obj, &err) == 0);
+	for (int level = 0; level <= 128; level++) {
+		struct scene_define d = { 0 };
+		char name[16];
+		snprintf(name, sizeof name, "d%d", level);
+		d.name = strdup(name);
+		d.objects = malloc(2 * sizeof(uint32_t));
+		d.n_objects = level == 0 ? 1 : 2;
+		for (uint32_t k = 0; k < d.n_objects; k++) {
+			if (level == 0) {
+				d.objects[k] = obj;
+				continue;
+			}
+			scene_object_defaults(&o, PRIM_INSTANCE);
+			o.u.instance.define = def;
+			CHECK(scene_add_object(s, &o, &d.objects[k], &err) == 0);
+		}
+		CHECK(scene_add_define(s, &d, &def, &err) == 0);
+	}
+	scene_object_defaults(&o, PRIM_INSTANCE);
+	o.u.instance.define = def;
+	CHECK(scene_add_object(s, &o, &obj, &err) == 0);
+	CHECK(scene_add_root(s, obj, &err) == 0);
+	struct scene_stats st;
+	scene_stats(s, &st);
+	CHECK(st.triangles == 1);
+	CHECK(st.triangles_instanced == UINT64_MAX);
+	scene_free(s);
+}
+
+/* The default material is set up once however many threads ask first
+ * (a plain flag was a data race: run under -fsanitize=thread to see it). */
+static void *default_material_thread(void *arg)
+{
+	(void)arg;
+	const struct scene_material *m = scene_default_material();
+	return (void *)(m->diffuse == 1.0 && m->diff_colour.x == 1 ? m : NULL);
+}
+
+static void test_default_material_threads(void)
+{
+	pthread_t t[4];
+	void *got[4];
+	for (int i = 0; i < 4; i++)
+		CHECK(pthread_create(&t[i], NULL, default_material_thread, NULL) == 0);
+	for (int i = 0; i < 4; i++) {
+		pthread_join(t[i], &got[i]);
+		CHECK(got[i] != NULL && got[i] == got[0]);
+	}
+}
+
 int main(void)
 {
+	test_default_material_threads(); /* first: the first use is what races */
 	test_defaults();
 	test_xform();
 	test_builder();
 	test_mesh_stats();
+	test_stats_saturate();
 	TEST_MAIN_END();
 }
