@@ -1,9 +1,11 @@
 /*
  * check.c - `portray-master --check [-c CAMERA] SCENE`: parse everything,
  * print a short summary on stdout (errors on stderr) and return the
- * Appendix B error level.
+ * Appendix B error level (EXIT_IO when the summary cannot be written).
  */
+#include <errno.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "common/parse.h"
 #include "master/master.h"
@@ -87,5 +89,9 @@ int master_check(const struct master_opts *o)
 	printf("instances: %u\n", st.by_kind[PRIM_INSTANCE]);
 	printf("materials: %u (%u named, %u inline)\n", s->n_materials, st.materials_named, st.materials_anon);
 	scene_free(s);
+	if (fflush(stdout) != 0 || ferror(stdout)) {
+		fprintf(stderr, "portray-master: cannot write the summary: %s\n", strerror(errno));
+		return EXIT_IO;
+	}
 	return 0;
 }

@@ -52,4 +52,12 @@ printf 'camera filter lens ; filter standard ;\n' >"$T/w.sce"
 grep -q "w.sce:1:8: warning: filter lens before the first standard or adaptive filter is ignored" "$T/err" ||
 	fail "warning text: $(cat "$T/err")"
 grep -qx 'filters: standard' "$T/out" || fail "filters after the warning"
+
+# a summary that cannot be written is an I/O error (74), not success
+if [ -w /dev/full ]; then
+	"$M" --check "$T/s.sce" >/dev/full 2>"$T/err"
+	rc=$?
+	[ "$rc" = 74 ] || fail "--check to a full device gave exit $rc"
+	grep -q "cannot write the summary" "$T/err" || fail "full device message: $(cat "$T/err")"
+fi
 echo ok
