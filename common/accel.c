@@ -482,8 +482,9 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 		const uint32_t *ix = tri_ix(m, g->tri[i].tri);
 		double w0 = 1 - c->b1 - c->b2;
 		vec3 a = m->v[ix[0]], b = m->v[ix[1]], cc = m->v[ix[2]];
-		h->ng = v3_norm(v3_cross(v3_sub(b, a), v3_sub(cc, a)));
-		h->n = h->ng;
+		vec3 fn = v3_norm(v3_cross(v3_sub(b, a), v3_sub(cc, a)));
+		h->ng = fn;
+		h->n = fn;
 		if (m->n) {
 			vec3 sn = v3_add(v3_add(v3_scale(m->n[ix[0]], w0), v3_scale(m->n[ix[1]], c->b1)),
 					 v3_scale(m->n[ix[2]], c->b2));
@@ -495,7 +496,10 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 		}
 		vec3 oa = m->ov[ix[0]], ob = m->ov[ix[1]], oc = m->ov[ix[2]];
 		h->mp = v3_add(v3_add(v3_scale(oa, w0), v3_scale(ob, c->b1)), v3_scale(oc, c->b2));
-		geom_tri_uv(oa, ob, oc, h->mp, &h->u, &h->v);
+		if (m->ov == m->v) /* untransformed: geom_tri_uv's normal is fn, computed alike */
+			geom_tri_uv_n(oa, ob, fn, h->mp, &h->u, &h->v);
+		else
+			geom_tri_uv(oa, ob, oc, h->mp, &h->u, &h->v);
 		h->object = m->obj;
 		h->material = s->objects[m->obj].material;
 		break;
@@ -529,8 +533,21 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 {
 	struct cand best;
 	bool found = false;
-	for (uint32_t k = 0; k < g->n_unb; k++)
-		found |= ref_test(A, g, g->unb[k], r, &best, brute);
+	for (uint32_t k = 0; k < g->n_unb; k++) {
+		uint32_t ref = g->unb[k];
+		const struct geom_obj *go = REF_KIND(ref) == REF_XPRIM ? g->xp[REF_IDX(ref)].g : NULL;
+		if (go && go->kind == PRIM_PLANE && !go->has_xform) { /* geom_intersect's plane test, inline */
+			double t;
+			if (geom_plane_t(go->u.pl.pos, go->u.pl.n, r->o, r->d, &t) && t > r->tmin && t < r->tmax) {
+				best.ref = ref;
+				best.t = r->tmax = t;
+				best.part = GEOM_PART_MAIN;
+				found = true;
+			}
+			continue;
+		}
+		found |= ref_test(A, g, ref, r, &best, brute);
+	}
 	if (brute) { /* every primitive, kind by kind, without the tree */
 		for (uint32_t k = 0; k < g->n_sph; k++) {
 			double t;
@@ -587,6 +604,20 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 					int c = __builtin_ctz((unsigned)m);
 					idx = nd->idx[c];
 					n = nd->n[c];
+					continue;
+				}
+				int m2 = m & (m - 1); /* m without its lowest child */
+				if (m2 && !(m2 & (m2 - 1))) { /* two children */
+					int c0 = __builtin_ctz((unsigned)m), c1 = __builtin_ctz((unsigned)m2);
+					if (tn[c0] > tn[c1]) { /* the nearer first; ties keep slot order */
+						int tc = c0;
+						c0 = c1, c1 = tc;
+					}
+					stack[sp].idx = nd->idx[c1];
+					stack[sp].n = nd->n[c1];
+					stack[sp++].t = tn[c1];
+					idx = nd->idx[c0];
+					n = nd->n[c0];
 					continue;
 				}
 				if (m) { /* nearest first; the others pushed farthest first */
@@ -682,10 +713,14 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 
 /* ---- public queries ----------------------------------------------------------------- */
 
-static bool ray_ok(const struct ray *r)
+/* Finite origin and direction, non-zero direction, tmin < tmax (false when
+ * either is NaN). x - x is 0 for a finite x and NaN for an infinite or NaN
+ * one, so one sum tests all six components. */
+static inline bool ray_ok(const struct ray *r)
 {
-	return v3_finite(r->o) && v3_finite(r->d) && v3_dot(r->d, r->d) > 0 && !isnan(r->tmin) &&
-	       !isnan(r->tmax) && r->tmin < r->tmax;
+	double z = ((r->o.x - r->o.x) + (r->o.y - r->o.y)) + ((r->o.z - r->o.z) + (r->d.x - r->d.x)) +
+		   ((r->d.y - r->d.y) + (r->d.z - r->d.z));
+	return z == 0 && v3_dot(r->d, r->d) > 0 && r->tmin < r->tmax;
 }
 
 bool accel_intersect(const struct accel *a, const struct ray *r, struct hit *h)

@@ -452,14 +452,7 @@ static bool box_solid(const struct geom_obj *g, vec3 o, vec3 d, double *t0, doub
 }
 
 /* Line meets the plane (pos, n): t, or false when parallel. */
-static bool plane_t(vec3 pos, vec3 n, vec3 o, vec3 d, double *t)
-{
-	double den = v3_dot(d, n);
-	if (den == 0)
-		return false;
-	*t = v3_dot(v3_sub(pos, o), n) / den;
-	return isfinite(*t);
-}
+static bool plane_t(vec3 pos, vec3 n, vec3 o, vec3 d, double *t) { return geom_plane_t(pos, n, o, d, t); }
 
 static bool tri_line(const struct geom_obj *g, vec3 o, vec3 d, double tmin, double tmax, double *t)
 {
@@ -624,12 +617,7 @@ int geom_crossings(const struct geom_obj *g, vec3 o, vec3 d, struct geom_cross1 
 
 void geom_tri_uv(vec3 a, vec3 b, vec3 c, vec3 p, double *u, double *v)
 {
-	vec3 e = v3_norm(v3_sub(b, a));
-	vec3 n = v3_norm(v3_cross(v3_sub(b, a), v3_sub(c, a)));
-	vec3 f = v3_cross(n, e);
-	vec3 q = v3_sub(p, a);
-	*u = v3_dot(q, e);
-	*v = v3_dot(q, f);
+	geom_tri_uv_n(a, b, v3_norm(v3_cross(v3_sub(b, a), v3_sub(c, a))), p, u, v);
 }
 
 void geom_surface(const struct geom_obj *g, vec3 p, int part, vec3 *n, double *u, double *v)
@@ -723,7 +711,8 @@ void geom_wray_init(struct geom_wray *w, vec3 o, vec3 d)
 	w->o[0] = o.x, w->o[1] = o.y, w->o[2] = o.z;
 	double ax = fabs(d.x), ay = fabs(d.y), az = fabs(d.z);
 	int kz = ax >= ay && ax >= az ? 0 : ay >= az ? 1 : 2;
-	int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
+	static const int next[3] = { 1, 2, 0 };
+	int kx = next[kz], ky = next[kx];
 	if (dd[kz] < 0) {
 		int tmp = kx;
 		kx = ky, ky = tmp;

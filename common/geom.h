@@ -81,11 +81,33 @@ enum { GEOM_PART_MAIN = 0, GEOM_PART_CAP0 = 1, GEOM_PART_CAP1 = 2 };
 bool geom_intersect(const struct geom_obj *g, vec3 o, vec3 d, double tmin, double tmax, double *t,
 		    int *part);
 
+/* Where the line o + t d crosses the plane through pos with normal n:
+ * false when parallel or the distance is not finite. */
+static inline bool geom_plane_t(vec3 pos, vec3 n, vec3 o, vec3 d, double *t)
+{
+	double den = v3_dot(d, n);
+	if (den == 0)
+		return false;
+	*t = v3_dot(v3_sub(pos, o), n) / den;
+	return isfinite(*t);
+}
+
 /* Unit outward (object-space) normal and (u,v) at object-space point p of part. */
 void geom_surface(const struct geom_obj *g, vec3 p, int part, vec3 *n, double *u, double *v);
 
 /* Triangle (u,v) mapping: lengths along unit(b-a) and along n x unit(b-a) from a. */
 void geom_tri_uv(vec3 a, vec3 b, vec3 c, vec3 p, double *u, double *v);
+
+/* The same with the unit normal n = v3_norm(v3_cross(b - a, c - a)) already
+ * computed (bit-identical results: geom_tri_uv is this after computing n). */
+static inline void geom_tri_uv_n(vec3 a, vec3 b, vec3 n, vec3 p, double *u, double *v)
+{
+	vec3 e = v3_norm(v3_sub(b, a));
+	vec3 f = v3_cross(n, e);
+	vec3 q = v3_sub(p, a);
+	*u = v3_dot(q, e);
+	*v = v3_dot(q, f);
+}
 
 /*
  * Boundary crossings along the whole line o + t d, for CSG. A solid gives
