@@ -14,6 +14,9 @@
 
 #include "common/limits.h"
 
+#define LEX_STR_(x) #x
+#define LEX_STR(x) LEX_STR_(x)
+
 /* longest keyword spelling we look up; longer words are never keywords */
 #define KW_MAX_LEN 32
 /* hash table slots: a power of two well above the ~130 spellings */
@@ -244,7 +247,7 @@ void lex_next(struct lexer *lx, struct token *t)
 		i++;
 	size_t len = i - start;
 	if (len > LIM_TOKEN_LEN) {
-		lex_fail(lx, t, "token too long");
+		lex_fail(lx, t, "token too long (more than " LEX_STR(LIM_TOKEN_LEN) " bytes)");
 		return;
 	}
 	lx->pos = i;

@@ -29,6 +29,8 @@
 #define NOT_MINE (-1)
 /* longest token text quoted in a message ("near '...'") */
 #define NEAR_MAX 40
+/* room for " near '" + NEAR_MAX bytes, each possibly shown as \xNN, + "...'" */
+#define NEAR_BUF (16 + 4 * NEAR_MAX)
 /* a contour's points must lie within this fraction of the polygon's size of
  * the first contour's plane (rounding in written decimals, nothing more) */
 #define POLY_PLANE_TOL 1e-6
@@ -88,19 +90,49 @@ struct parser {
 
 /* ---- messages --------------------------------------------------------------- */
 
-/* Formats "near 'tok'" (or "near end of file") into buf. */
+/* Length of the valid UTF-8 sequence at s[0..n) (1 to 4), or 0 if invalid. */
+static size_t utf8_len(const unsigned char *s, size_t n)
+{
+	size_t k = s[0] < 0x80 ? 1 : s[0] >= 0xc2 && s[0] <= 0xdf ? 2 : s[0] >= 0xe0 && s[0] <= 0xef ? 3
+		   : s[0] >= 0xf0 && s[0] <= 0xf4 ? 4 : 0;
+	if (k == 0 || k > n)
+		return 0;
+	for (size_t i = 1; i < k; i++)
+		if ((s[i] & 0xc0) != 0x80)
+			return 0;
+	return k;
+}
+
+/*
+ * Formats "near 'tok'" (or "near end of file") into buf (n >= NEAR_BUF).
+ * At most NEAR_MAX bytes of the word are quoted; bytes that are not valid
+ * UTF-8 (binary junk) are shown as \xNN so a message never sends raw bytes
+ * to the terminal.
+ */
 static void near_text(const struct token *t, char *buf, size_t n)
 {
 	switch (t->kind) {
 	case TK_EOF:
 		snprintf(buf, n, " near end of file");
 		break;
-	case TK_WORD:
-		if (t->len > NEAR_MAX)
-			snprintf(buf, n, " near '%.*s...'", NEAR_MAX, t->text);
-		else
-			snprintf(buf, n, " near '%.*s'", (int)t->len, t->text);
+	case TK_WORD: {
+		const unsigned char *w = (const unsigned char *)t->text;
+		size_t m = t->len < NEAR_MAX ? t->len : NEAR_MAX, o = 0;
+		o += (size_t)snprintf(buf + o, n - o, " near '");
+		for (size_t i = 0; i < m && o + 8 < n;) {
+			size_t k = utf8_len(w + i, t->len - i);
+			if (k == 0) {
+				o += (size_t)snprintf(buf + o, n - o, "\\x%02x", w[i]);
+				i++;
+			} else {
+				memcpy(buf + o, w + i, k);
+				o += k;
+				i += k;
+			}
+		}
+		snprintf(buf + o, n - o, "%s'", t->len > m ? "..." : "");
 		break;
+	}
 	case TK_SEMI:
 	case TK_LPAREN:
 	case TK_RPAREN:
@@ -118,7 +150,7 @@ static void near_text(const struct token *t, char *buf, size_t n)
  */
 static int vreport(struct parser *P, int level, const struct token *t, int near, const char *fmt, va_list ap)
 {
-	char msg[600], nt[NEAR_MAX + 32];
+	char msg[600], nt[NEAR_BUF];
 	if (t->kind == TK_ERROR) {
 		snprintf(msg, sizeof msg, "%s", P->lx.errmsg ? P->lx.errmsg : "invalid input");
 		near = 0;

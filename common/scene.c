@@ -306,8 +306,9 @@ int scene_set_image(struct scene *s, const struct scene_image *im, struct scene_
 {
 	if (im->xsize < 1 || im->ysize < 1 || im->xsize > LIM_IMAGE_SIDE || im->ysize > LIM_IMAGE_SIDE ||
 	    (uint64_t)im->xsize * (uint64_t)im->ysize > LIM_IMAGE_PIXELS)
-		return scene_errorf(err, 1, LOCFMT "image size %dx%d out of range (1..%d per side)",
-				    LOCARGS(&im->loc), im->xsize, im->ysize, LIM_IMAGE_SIDE);
+		return scene_errorf(err, 1, LOCFMT "image size %dx%d out of range (1..%d per side, at most %llu pixels)",
+				    LOCARGS(&im->loc), im->xsize, im->ysize, LIM_IMAGE_SIDE,
+				    (unsigned long long)LIM_IMAGE_PIXELS);
 	if (im->intersect_buffer < 0)
 		return scene_errorf(err, 1, LOCFMT "intersect-buffer must not be negative", LOCARGS(&im->loc));
 	s->image = *im;
