@@ -24,6 +24,17 @@ local_render "$SCENE" "$T/local2.ppm" --size 50x37
 "$BIN/portray-master" "$SCENE" -o "$T/farm2.ppm" -w "$W" --no-local --size 50x37 -q || fail "farm --size failed"
 cmp "$T/local2.ppm" "$T/farm2.ppm" || fail "farm image at --size 50x37 differs"
 
+# the same workers from a workers file (comments, blank lines, spaces)
+printf '# the farm\n\n  127.0.0.1:%s   # a\n127.0.0.1:%s\n' "$a_PORT" "$b_PORT" >"$T/workers"
+"$BIN/portray-master" "$SCENE" -o "$T/farm3.ppm" --workers-file "$T/workers" --no-local -q || fail "--workers-file failed"
+cmp "$T/local.ppm" "$T/farm3.ppm" || fail "farm image via --workers-file differs"
+
+# the worker's own command line
+"$BIN/portray-worker" --help | grep -q -- "--cache-mb" || fail "worker --help"
+"$BIN/portray-worker" --version | grep -q "protocol 1" || fail "worker --version"
+"$BIN/portray-worker" --bogus 2>/dev/null
+[ $? -eq 64 ] || fail "worker: unknown option should exit 64"
+
 # every job logged one line on the workers
-[ "$(grep -c ' job ' "$T/a.log")" -ge 3 ] || fail "worker a did not log its jobs"
+[ "$(grep -c ' job ' "$T/a.log")" -ge 4 ] || fail "worker a did not log its jobs"
 echo "ok"
