@@ -17,4 +17,17 @@ grep -q "bytes sent [0-9]* (scene 0," "$T/m2.log" || fail "master 2's total show
 sed 's/radius 0.7/radius 0.6/' "$SCENE" >"$T/changed.sce"
 "$BIN/portray-master" "$T/changed.sce" -o "$T/f3.ppm" -w "127.0.0.1:$a_PORT" --no-local 2>"$T/m3.log" || fail "third job failed"
 [ "$(grep -c 'scene cache miss' "$T/a.log")" -eq 2 ] || fail "changed scene was not a miss"
+# the cache is bounded (--cache-mb), least recently used out: two scenes of
+# ~750 KB do not both fit in 1 MiB
+start_worker small -j 1 --cache-mb 1
+B1=tests/data/spd/balls_s4.sce
+sed 's/radius 0.5 ;/radius 0.45 ;/' "$B1" >"$T/balls2.sce"
+cmp -s "$B1" "$T/balls2.sce" && fail "could not make a second scene"
+for s in "$B1" "$B1" "$T/balls2.sce" "$B1"; do
+	"$BIN/portray-master" "$s" --size 32x24 -o "$T/b.ppm" -w "127.0.0.1:$small_PORT" --no-local -q ||
+		fail "job on the small cache failed"
+done
+grep -o 'cache [a-z]*' "$T/small.log" | tr '\n' ' ' >"$T/seq"
+[ "$(cat "$T/seq")" = "cache miss cache hit cache miss cache miss " ] ||
+	fail "LRU sequence wrong: $(cat "$T/seq")"
 echo ok
