@@ -34,16 +34,22 @@ W=127.0.0.1:$P1,127.0.0.1:$P2
 # warm the workers' caches and the page cache, so both runs compare tracing
 "$BIN/portray-master" "$SCENE" --size 64x48 -o "$T/warm.ppm" -w "$W" --no-local -q || exit 1
 
-t0=$(now)
-"$BIN/portray-master" "$SCENE" --size "$SIZE" -o "$T/local.ppm" -j 2 -q || exit 1
-t1=$(now)
-"$BIN/portray-master" "$SCENE" --size "$SIZE" -o "$T/farm.ppm" -w "$W" --no-local 2>"$T/farm.log" || exit 1
-t2=$(now)
+# best of 3 each, alternating, to damp the noise of a shared machine
+tl=999
+tf=999
+for i in 1 2 3; do
+	t0=$(now)
+	"$BIN/portray-master" "$SCENE" --size "$SIZE" -o "$T/local.ppm" -j 2 -q || exit 1
+	t1=$(now)
+	"$BIN/portray-master" "$SCENE" --size "$SIZE" -o "$T/farm.ppm" -w "$W" --no-local 2>"$T/farm.log" || exit 1
+	t2=$(now)
+	tl=$(awk -v a="$t0" -v b="$t1" -v m="$tl" 'BEGIN { d = b - a; print (d < m ? d : m) }')
+	tf=$(awk -v a="$t1" -v b="$t2" -v m="$tf" 'BEGIN { d = b - a; print (d < m ? d : m) }')
+done
 same=differs
 cmp -s "$T/local.ppm" "$T/farm.ppm" && same=identical
-awk -v a="$t0" -v b="$t1" -v c="$t2" -v s="$SIZE" -v same="$same" 'BEGIN {
-	tl = b - a; tf = c - b;
-	printf "farm efficiency: %s at %s: local -j 2 %.2f s, master + 2 workers (-j 1, --no-local) %.2f s: %.0f%% (target >= 90%%), image %s\n",
+awk -v tl="$tl" -v tf="$tf" -v s="$SIZE" -v same="$same" 'BEGIN {
+	printf "farm efficiency: %s at %s, best of 3: local -j 2 %.2f s, master + 2 workers (-j 1, --no-local) %.2f s: %.0f%% (target >= 90%%), image %s\n",
 	       "balls_s4", s, tl, tf, 100 * tl / tf, same }'
 grep "farm: bytes sent" "$T/farm.log" | sed 's/^portray-master: /  /'
 awk '/received/ { for (i = 1; i <= NF; i++) if ($i == "received") r += $(i + 1) } END { printf "  bytes received (tile results) %d\n", r }' "$T/farm.log"
