@@ -6,11 +6,15 @@
  */
 #include "common/lex.h"
 
+#include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "common/limits.h"
 
@@ -256,4 +260,89 @@ void lex_next(struct lexer *lx, struct token *t)
 	t->num = lex_number(t->text, len, &t->value);
 	if (t->num == NUM_NO)
 		t->kw = lex_keyword(t->text, len);
+}
+
+/* Initial buffer for a file whose size fstat cannot tell (a pipe, a device). */
+#define LEX_READ_CHUNK 65536
+
+int lex_read_file(const char *path, size_t limit, char **buf, size_t *len, unsigned long long *dev,
+		  unsigned long long *ino, int *nul_line, int *nul_col)
+{
+	int fd = open(path, O_RDONLY | O_CLOEXEC);
+	if (fd < 0)
+		return errno;
+	struct stat st;
+	if (fstat(fd, &st) < 0) {
+		int e = errno;
+		close(fd);
+		return e;
+	}
+	if (S_ISDIR(st.st_mode)) {
+		close(fd);
+		return EISDIR;
+	}
+	*dev = (unsigned long long)st.st_dev;
+	*ino = (unsigned long long)st.st_ino;
+	/* one byte more than the limit, so that a file over it is seen */
+	const size_t most = limit + 1;
+	size_t cap = S_ISREG(st.st_mode) && st.st_size > 0 && (unsigned long long)st.st_size < most
+			     ? (size_t)st.st_size + 1
+			     : LEX_READ_CHUNK;
+	size_t n = 0;
+	char *b = malloc(cap);
+	int e = b ? 0 : ENOMEM;
+	while (!e) {
+		if (n == cap) {
+			if (cap >= most) {
+				e = EFBIG;
+				break;
+			}
+			size_t nc = cap > most / 2 ? most : cap * 2;
+			char *nb = realloc(b, nc);
+			if (!nb) {
+				e = ENOMEM;
+				break;
+			}
+			b = nb;
+			cap = nc;
+		}
+		ssize_t r = read(fd, b + n, cap - n);
+		if (r < 0) {
+			if (errno != EINTR)
+				e = errno;
+			continue;
+		}
+		if (r == 0)
+			break;
+		const char *z = memchr(b + n, '\0', (size_t)r);
+		n += (size_t)r;
+		if (z) { /* its line and column, counted as the lexer counts */
+			*nul_line = 1;
+			*nul_col = 1;
+			for (const char *q = b; q < z; q++) {
+				if (*q == '\n')
+					++*nul_line, *nul_col = 1;
+				else
+					++*nul_col;
+			}
+			e = EILSEQ;
+		}
+	}
+	close(fd);
+	if (!e && n > limit)
+		e = EFBIG;
+	if (!e && n == cap) { /* keep the promised byte past the end */
+		char *nb = realloc(b, n + 1);
+		if (!nb)
+			e = ENOMEM;
+		else
+			b = nb;
+	}
+	if (e) {
+		free(b);
+		return e;
+	}
+	*buf = b;
+	*len = n;
+	return 0;
 }

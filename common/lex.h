@@ -122,4 +122,17 @@ enum keyword lex_keyword(const char *w, size_t n);
  * (number-like but malformed or not finite) or NUM_NO (not number-like). */
 int lex_number(const char *w, size_t n, double *v);
 
+/*
+ * Reads the text file at path whole into *buf (malloc'd, caller frees; room
+ * for one byte past *len), reading at most limit bytes: the one reader for
+ * scene, camera, include and RAW files. On success *dev and *ino identify
+ * the file (include cycles). Returns 0 or an errno: EISDIR for a directory,
+ * EFBIG past limit, ENOMEM, a read error, or EILSEQ at the first NUL byte:
+ * reading stops there (so /dev/zero or a binary file fails at once) with
+ * *nul_line and *nul_col its position, counted as the lexer counts. On error
+ * nothing is left to free.
+ */
+int lex_read_file(const char *path, size_t limit, char **buf, size_t *len, unsigned long long *dev,
+		  unsigned long long *ino, int *nul_line, int *nul_col);
+
 #endif

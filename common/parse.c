@@ -43,8 +43,7 @@
 	} while (0)
 
 struct inc_id {
-	dev_t dev;
-	ino_t ino;
+	unsigned long long dev, ino;
 };
 
 /*
@@ -1840,106 +1839,25 @@ static int parse_define(struct parser *P)
 
 static int parse_text(struct parser *P, const char *name, const char *buf, size_t len);
 
-/*
- * Reads the whole file at path into *buf (malloc'd: caller frees), bounded by
- * LIM_FILE_BYTES, and identifies it for the include-cycle check. Returns 0 or
- * an errno: EFBIG past the limit; EILSEQ at the first NUL byte (reading stops
- * there, so /dev/zero or a binary file ends at once), with nul->line and
- * nul->col its position and nothing to free.
- */
-static int read_file(const char *path, char **buf, size_t *len, struct inc_id *id, struct token *nul)
-{
-	int fd = open(path, O_RDONLY | O_CLOEXEC);
-	if (fd < 0)
-		return errno;
-	struct stat st;
-	if (fstat(fd, &st) < 0 || S_ISDIR(st.st_mode)) {
-		int e = errno;
-		if (e == 0 || S_ISDIR(st.st_mode))
-			e = EISDIR;
-		close(fd);
-		return e;
-	}
-	id->dev = st.st_dev;
-	id->ino = st.st_ino;
-	/* one byte more than the limit, so that a file over it is seen */
-	const size_t most = (size_t)LIM_FILE_BYTES + 1;
-	size_t cap = S_ISREG(st.st_mode) && st.st_size > 0 && (unsigned long long)st.st_size < most
-			     ? (size_t)st.st_size + 1
-			     : 65536;
-	size_t n = 0;
-	char *b = malloc(cap);
-	int e = 0;
-	if (!b)
-		e = ENOMEM;
-	while (!e) {
-		if (n == cap) {
-			if (cap >= most) {
-				e = EFBIG;
-				break;
-			}
-			size_t nc = cap > most / 2 ? most : cap * 2;
-			char *nb = realloc(b, nc);
-			if (!nb) {
-				e = ENOMEM;
-				break;
-			}
-			b = nb;
-			cap = nc;
-		}
-		ssize_t r = read(fd, b + n, cap - n);
-		if (r < 0) {
-			if (errno == EINTR)
-				continue;
-			e = errno;
-		} else if (r == 0) {
-			break;
-		} else {
-			const char *z = memchr(b + n, '\0', (size_t)r);
-			n += (size_t)r;
-			if (z) { /* its line and column, counted as the lexer counts */
-				nul->line = 1;
-				nul->col = 1;
-				for (const char *q = b; q < z; q++) {
-					if (*q == '\n')
-						nul->line++, nul->col = 1;
-					else
-						nul->col++;
-				}
-				e = EILSEQ;
-			}
-		}
-	}
-	close(fd);
-	if (!e && n > LIM_FILE_BYTES)
-		e = EFBIG;
-	if (e) {
-		free(b);
-		return e;
-	}
-	*buf = b;
-	*len = n;
-	return 0;
-}
-
 /* Parses the file at path (role names it in messages: "scene", "include"...);
  * at, when not NULL, is the token that asked for it (errors point there). */
 static int parse_path(struct parser *P, const char *path, const char *role, const struct token *at)
 {
 	char *buf = NULL;
 	size_t len = 0;
-	struct inc_id id;
-	struct token nul = { 0 };
-	int e = read_file(path, &buf, &len, &id, &nul);
+	unsigned long long dev = 0, ino = 0;
+	int nul_line = 0, nul_col = 0;
+	int e = lex_read_file(path, LIM_FILE_BYTES, &buf, &len, &dev, &ino, &nul_line, &nul_col);
 	if (e == EILSEQ)
 		return scene_errorf(P->err, ERRLEVEL_FATAL, "%s:%d:%d: error: NUL byte (the %s file is not text)",
-				    path, nul.line, nul.col, role);
+				    path, nul_line, nul_col, role);
 	if (e) {
 		const char *why = e == EFBIG ? "file too large (at most 1 GiB)" : strerror(e);
 		if (at)
 			return err_at(P, ERRLEVEL_FATAL, at, "unable to open %s file '%s': %s", role, path, why);
 		return scene_errorf(P->err, ERRLEVEL_FATAL, "%s: error: unable to open %s file: %s", path, role, why);
 	}
+	struct inc_id id = { dev, ino };
 	for (int i = 0; i < P->n_inc; i++) {
 		if (P->inc[i].dev == id.dev && P->inc[i].ino == id.ino) {
 			free(buf);

@@ -58,14 +58,13 @@
 #include "common/raw.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
+
+#include "common/lex.h"
 
 /* ---- numbers ------------------------------------------------------------ */
 
@@ -636,70 +635,29 @@ fail:
 }
 
 /*
- * Reads the whole file at path into memory (one read for a regular file,
- * growing for pipes), bounded by LIM_RAW_BYTES, and parses it. Messages name
- * mesh->file when set, else path.
+ * Reads the whole file at path (lex_read_file: bounded by LIM_RAW_BYTES,
+ * stopping at a NUL byte) and parses it. Messages name mesh->file when set,
+ * else path.
  */
 int raw_load(const char *path, struct scene_mesh *mesh, struct scene_error *err)
 {
 	const char *name = mesh->file ? mesh->file : path;
-	int fd = open(path, O_RDONLY);
-	if (fd < 0)
-		return scene_errorf(err, ERRLEVEL_FATAL, "%s: error: unable to open raw file: %s", name,
-				    strerror(errno));
-	struct stat st;
-	if (fstat(fd, &st) < 0 || S_ISDIR(st.st_mode)) {
-		int e = S_ISDIR(st.st_mode) ? EISDIR : errno;
-		close(fd);
-		return scene_errorf(err, ERRLEVEL_FATAL, "%s: error: unable to open raw file: %s", name,
-				    strerror(e));
-	}
-	if (S_ISREG(st.st_mode) && (unsigned long long)st.st_size > LIM_RAW_BYTES) {
-		close(fd);
+	char *buf = NULL;
+	size_t n = 0;
+	unsigned long long dev, ino;
+	int nul_line = 0, nul_col = 0;
+	int e = lex_read_file(path, LIM_RAW_BYTES, &buf, &n, &dev, &ino, &nul_line, &nul_col);
+	if (e == EILSEQ)
+		return scene_errorf(err, ERRLEVEL_FATAL, "%s:%d: error: NUL byte (a raw file is text)", name,
+				    nul_line);
+	if (e == EFBIG)
 		return scene_errorf(err, ERRLEVEL_FATAL, "%s: error: raw file larger than %llu bytes", name,
 				    (unsigned long long)LIM_RAW_BYTES);
-	}
-	size_t cap = S_ISREG(st.st_mode) && st.st_size > 0 ? (size_t)st.st_size + 1 : 65536;
-	size_t n = 0;
-	char *buf = malloc(cap);
-	if (!buf) {
-		close(fd);
+	if (e == ENOMEM)
 		return scene_errorf(err, ERRLEVEL_FATAL, "%s: error: out of memory reading the file", name);
-	}
-	for (;;) {
-		if (n == cap) {
-			if (cap > LIM_RAW_BYTES) {
-				free(buf);
-				close(fd);
-				return scene_errorf(err, ERRLEVEL_FATAL, "%s: error: raw file larger than %llu bytes",
-						    name, (unsigned long long)LIM_RAW_BYTES);
-			}
-			size_t ncap = cap * 2 > LIM_RAW_BYTES + 1 ? LIM_RAW_BYTES + 1 : cap * 2;
-			char *nb = realloc(buf, ncap);
-			if (!nb) {
-				free(buf);
-				close(fd);
-				return scene_errorf(err, ERRLEVEL_FATAL, "%s: error: out of memory reading the file",
-						    name);
-			}
-			buf = nb;
-			cap = ncap;
-		}
-		ssize_t r = read(fd, buf + n, cap - n);
-		if (r < 0 && errno == EINTR)
-			continue;
-		if (r < 0) {
-			int e = errno;
-			free(buf);
-			close(fd);
-			return scene_errorf(err, ERRLEVEL_FATAL, "%s: error: reading raw file: %s", name,
-					    strerror(e));
-		}
-		if (r == 0)
-			break;
-		n += (size_t)r;
-	}
-	close(fd);
+	if (e)
+		return scene_errorf(err, ERRLEVEL_FATAL, "%s: error: unable to open raw file: %s", name,
+				    strerror(e));
 	int rc = raw_parse(buf, n, mesh, err);
 	free(buf);
 	return rc;

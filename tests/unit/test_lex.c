@@ -2,8 +2,12 @@
  * test_lex.c - the lexer: token kinds, positions, comments, numbers,
  * keywords in any case and their aliases, limits and errors.
  */
+#include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "common/lex.h"
 #include "common/limits.h"
@@ -163,6 +167,51 @@ static void test_limits_and_errors(void)
 	CHECK(t.kind == TK_WORD && t.len == 5);
 }
 
+/* lex_read_file: whole files, the limit, directories, and a NUL byte. */
+static void test_read_file(void)
+{
+	char dir[] = "/tmp/test_lex_XXXXXX", path[128];
+	if (!mkdtemp(dir)) {
+		CHECK(0);
+		return;
+	}
+	snprintf(path, sizeof path, "%s/a.sce", dir);
+	FILE *f = fopen(path, "wb");
+	static const char text[] = "object\n\tsphere ;\nab\0cd\n";
+	fwrite(text, 1, sizeof text - 1, f);
+	fclose(f);
+	char *buf = NULL;
+	size_t len = 0;
+	unsigned long long dev = 0, ino = 0;
+	int line = 0, col = 0;
+	CHECK(lex_read_file(path, 1000, &buf, &len, &dev, &ino, &line, &col) == EILSEQ);
+	CHECK(line == 3 && col == 3);
+	f = fopen(path, "wb");
+	fwrite(text, 1, 18, f); /* up to "ab" */
+	fclose(f);
+	CHECK(lex_read_file(path, 1000, &buf, &len, &dev, &ino, &line, &col) == 0);
+	CHECK(buf && len == 18 && memcmp(buf, text, 18) == 0);
+	struct stat st;
+	CHECK(stat(path, &st) == 0 && dev == (unsigned long long)st.st_dev && ino == (unsigned long long)st.st_ino);
+	free(buf);
+	buf = NULL;
+	CHECK(lex_read_file(path, 18, &buf, &len, &dev, &ino, &line, &col) == 0); /* exactly the limit */
+	free(buf);
+	buf = NULL;
+	CHECK(lex_read_file(path, 17, &buf, &len, &dev, &ino, &line, &col) == EFBIG);
+	CHECK(lex_read_file(dir, 1000, &buf, &len, &dev, &ino, &line, &col) == EISDIR);
+	/* a device that never ends stops at its first byte, not at the limit */
+	if (access("/dev/zero", R_OK) == 0) {
+		CHECK(lex_read_file("/dev/zero", 1000000, &buf, &len, &dev, &ino, &line, &col) == EILSEQ);
+		CHECK(line == 1 && col == 1);
+	}
+	snprintf(path, sizeof path, "%s/none", dir);
+	CHECK(lex_read_file(path, 1000, &buf, &len, &dev, &ino, &line, &col) == ENOENT);
+	snprintf(path, sizeof path, "%s/a.sce", dir);
+	unlink(path);
+	CHECK(rmdir(dir) == 0);
+}
+
 int main(void)
 {
 	test_kinds_positions();
@@ -170,5 +219,6 @@ int main(void)
 	test_numbers();
 	test_keywords();
 	test_limits_and_errors();
+	test_read_file();
 	TEST_MAIN_END();
 }
