@@ -23,22 +23,15 @@ int cam_init(struct cam *c, const struct scene_camera *sc, uint32_t w, uint32_t 
 	return 0;
 }
 
-vec3 cam_film_point(const struct cam *c, double px, double py)
-{
-	double fx = (px / c->w - 0.5) * c->x_size;
-	double fy = (py / c->h - 0.5) * c->y_size;
-	vec3 p = v3_add(c->from, v3_scale(c->view, c->depth));
-	p = v3_add(p, v3_scale(c->right, fx));
-	return v3_add(p, v3_scale(c->down, fy));
-}
-
-/* Direction from look-from to the film point of (px, py). */
+/* Direction from look-from to the film point of (px, py) (not unit). */
 static vec3 cam_dir(const struct cam *c, double px, double py)
 {
 	double fx = (px / c->w - 0.5) * c->x_size;
 	double fy = (py / c->h - 0.5) * c->y_size;
 	return v3_add(v3_scale(c->view, c->depth), v3_add(v3_scale(c->right, fx), v3_scale(c->down, fy)));
 }
+
+vec3 cam_film_point(const struct cam *c, double px, double py) { return v3_add(c->from, cam_dir(c, px, py)); }
 
 struct ray cam_ray(const struct cam *c, double px, double py)
 {

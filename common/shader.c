@@ -20,19 +20,6 @@
 /* Offset decorrelating the bumpy saturation mask from the bump heights */
 #define BUMP_MASK_OFFSET 71.17
 
-/* Default materials of shader arguments that are absent (docs/language.md). */
-static void matt(struct shader_mat *o, vec3 colour, vec3 n)
-{
-	o->diff_colour = o->spec_colour = o->tran_colour = colour;
-	o->diffuse = 1.0;
-	o->specular = 0.0;
-	o->spec_power = 20.0;
-	o->reflection = 0.0;
-	o->transparency = 0.0;
-	o->ior = 1.0;
-	o->n = n;
-}
-
 /* The material's own settings, its shader ignored. */
 static void base(const struct scene_material *m, vec3 n, struct shader_mat *o)
 {
@@ -46,6 +33,14 @@ static void base(const struct scene_material *m, vec3 n, struct shader_mat *o)
 	o->transparency = m->transparency;
 	o->ior = m->ior;
 	o->n = n;
+}
+
+/* Default materials of shader arguments that are absent (docs/language.md):
+ * the default material (white and matt) with `colour colour`. */
+static void matt(struct shader_mat *o, vec3 colour, vec3 n)
+{
+	base(scene_default_material(), n, o);
+	o->diff_colour = o->spec_colour = o->tran_colour = colour;
 }
 
 /* x mod m in [0, m) for m > 0, also for negative x. */
