@@ -165,6 +165,7 @@ struct wk_job {
 	size_t head, len, cap;
 	int refs;             /* the connection + tiles being traced */
 	uint32_t running;
+	bool paused;          /* the master is not reading: trace nothing more for it */
 };
 
 struct wk_done {
@@ -277,7 +278,7 @@ static void *tracer(void *arg)
 		struct wk_job *j = NULL;
 		for (size_t k = 0; k < pool.n_jobs; k++) {
 			struct wk_job *c = pool.jobs[(pool.cursor + k) % pool.n_jobs];
-			if (c->head < c->len && c->conn) {
+			if (c->head < c->len && c->conn && !c->paused) {
 				j = c;
 				pool.cursor = (pool.cursor + k + 1) % pool.n_jobs;
 				break;
@@ -934,6 +935,17 @@ static void tick(void)
 			drop = true;
 		} else if (!drop && c->state == ST_CLOSING && proto_conn_outq(c->pc) == 0) {
 			drop = true;
+		} else if (!drop && c->job) {
+			/* back-pressure: results pile up while the master does not read;
+			 * stop tracing for it until they drain (bounds this job's memory) */
+			bool full = proto_conn_outq(c->pc) > PROTO_OUT_HIGH_WATER;
+			if (full != c->job->paused) {
+				pthread_mutex_lock(&pool.mu);
+				c->job->paused = full;
+				if (!full)
+					pthread_cond_broadcast(&pool.cv);
+				pthread_mutex_unlock(&pool.mu);
+			}
 		}
 		if (drop) {
 			conn_close(i);
