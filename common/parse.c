@@ -511,6 +511,16 @@ static int parse_transform(struct parser *P, mat34 *xf, bool *has)
 	if (!scene_xform_op(xf, op, axis, amount, v))
 		return err_at(P, ERRLEVEL_FATAL, &kw, "'%s' by 0 would flatten the object",
 			      lex_keyword_name(kw.kw));
+	/* the composed transform must stay finite and invertible (the builder
+	 * checks it too, but here the message can name the transform) */
+	mat34 inv;
+	bool finite = true;
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 4; j++)
+			finite = finite && isfinite(xf->m[i][j]);
+	if (!finite || !m34_invert(xf, &inv))
+		return err_at(P, ERRLEVEL_FATAL, &kw, "'%s' makes the object's transform overflow or collapse",
+			      lex_keyword_name(kw.kw));
 	*has = true;
 	return 0;
 }

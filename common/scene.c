@@ -288,6 +288,9 @@ int scene_set_camera(struct scene *s, const struct scene_camera *c, struct scene
 		return scene_errorf(err, 1, LOCFMT "camera depth, x-size and y-size must be positive",
 				    LOCARGS(&c->loc));
 	vec3 view = v3_sub(c->look_at, c->look_from);
+	if (!isfinite(v3_len(view)) || !isfinite(v3_len(c->drop_line)))
+		return scene_errorf(err, 1, LOCFMT "camera vectors too large (look-at - look-from or drop-line "
+					     "has no finite length)", LOCARGS(&c->loc));
 	if (v3_len(view) == 0)
 		return scene_errorf(err, 1, LOCFMT "camera look-at equals look-from", LOCARGS(&c->loc));
 	if (v3_len(v3_cross(view, c->drop_line)) <= 1e-12 * v3_len(view) * v3_len(c->drop_line))
