@@ -713,7 +713,9 @@ static void progress(struct farm *f, bool force)
 	if (!f->tty || f->o->quiet || (!force && now - f->last_progress < 0.25))
 		return;
 	f->last_progress = now;
-	uint32_t done = f->s.n_done, n = f->s.n;
+	pthread_mutex_lock(&f->s.mu);
+	uint32_t done = f->s.n_done, n = f->s.n, local_done = f->s.local_done;
+	pthread_mutex_unlock(&f->s.mu);
 	double el = now - f->t0;
 	char eta[32] = "?";
 	if (done > 0 && done < n)
@@ -722,7 +724,7 @@ static void progress(struct farm *f, bool force)
 		snprintf(eta, sizeof eta, "0s");
 	char line[512];
 	int len = snprintf(line, sizeof line, "farm %u/%u tiles %3.0f%% ETA %s | local %.1f t/s", done, n,
-			   100.0 * done / n, eta, el > 0 ? f->s.local_done / el : 0.0);
+			   100.0 * done / n, eta, el > 0 ? local_done / el : 0.0);
 	for (uint32_t i = 0; i < f->n_w && len < (int)sizeof line - 40; i++) {
 		struct worker *w = &f->w[i];
 		/* a recent rate: tiles over the last second or so */
