@@ -28,7 +28,11 @@ static atomic_int g_stop;
 static pthread_t g_thread;
 static bool g_thread_on, g_active, g_atexit;
 
-static const int g_fatal_sigs[] = { SIGTERM, SIGHUP, SIGQUIT };
+/* Signals that end the process while the terminal may be in our mode: the
+ * handler restores the terminal, then dies of the signal as before. The
+ * synchronous ones (SEGV, BUS, FPE, ILL) re-fault on return with the default
+ * action; the others are raised again. */
+static const int g_fatal_sigs[] = { SIGTERM, SIGHUP, SIGQUIT, SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL };
 #define N_FATAL ((int)(sizeof g_fatal_sigs / sizeof g_fatal_sigs[0]))
 static struct sigaction g_old_int, g_old_fatal[N_FATAL], g_old_tstp, g_old_cont;
 

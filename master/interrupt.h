@@ -21,7 +21,8 @@ enum interrupt_reason {
  * terminal whose foreground we are, the terminal is put in non-canonical,
  * no-echo mode and a thread sets *cancel on q, Q or a lone Esc; the terminal
  * is restored by interrupt_stop, at exit, and before the process dies of
- * SIGTERM, SIGHUP, SIGQUIT or a second SIGINT, or stops on SIGTSTP (raw mode
+ * SIGTERM, SIGHUP, SIGQUIT, a crash (SIGABRT, SIGSEGV, SIGBUS, SIGFPE,
+ * SIGILL) or a second SIGINT, or stops on SIGTSTP (raw mode
  * comes back on SIGCONT). One watch at a time. Returns 0, or -1 if already
  * watching.
  */

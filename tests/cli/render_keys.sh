@@ -48,4 +48,13 @@ grep -q 'ETA' "$TMP/log2" && fail "-q: progress bar drawn"
 grep -q 'rc=0$' "$TMP/log2" || fail "nonstop: exit status not 0: $(tail -c 300 "$TMP/log2")"
 ppm_check "$TMP/ns.ppm" 200 200
 [ "$(ppm_pixel "$TMP/ns.ppm" 200 199 199)" != "0 0 0" ] || fail "nonstop: image not complete"
+# a crash (SIGSEGV, SIGABRT) while the terminal is in key mode: restored before dying
+for sig in SEGV ABRT; do
+	on_tty "" 0 "$TMP/log" "'$MASTER' '$TMP/slow.sce' -o '$TMP/c.ppm' -j 1 --tile 20 </dev/tty 2>/dev/null &
+p=\$!; sleep 1; kill -$sig \$p; wait \$p; echo rc=\$?; stty -a"
+	tr -d '\r' <"$TMP/log" >"$TMP/log2"
+	grep -Eq '^rc=(13[4-9]|1[4-9][0-9])$' "$TMP/log2" || fail "SIG$sig: not killed by it: $(tail -c 300 "$TMP/log2")"
+	grep -q -- '-icanon' "$TMP/log2" && fail "SIG$sig: terminal left non-canonical"
+	grep -Eq '(^| )icanon' "$TMP/log2" || fail "SIG$sig: no stty output"
+done
 echo "render_keys: ok"
