@@ -45,11 +45,31 @@ _Static_assert(PROTO_BUILD_PROTO == PROTO_VERSION && PROTO_BUILD_SCENE == PROTO_
 #define STR2(x) #x
 #define STR(x) STR2(x)
 
+/* The compiler and the architecture: floating-point code generation differs
+ * between them, and the promise is byte-identical pixels. */
+#if defined(__clang__)
+#define BUILD_CC "clang-" STR(__clang_major__) "." STR(__clang_minor__) "." STR(__clang_patchlevel__)
+#elif defined(__GNUC__)
+#define BUILD_CC "gcc-" STR(__GNUC__) "." STR(__GNUC_MINOR__) "." STR(__GNUC_PATCHLEVEL__)
+#else
+#define BUILD_CC "cc"
+#endif
+#if defined(__x86_64__)
+#define BUILD_ARCH "x86_64"
+#elif defined(__aarch64__)
+#define BUILD_ARCH "aarch64"
+#elif defined(__i386__)
+#define BUILD_ARCH "i386"
+#else
+#define BUILD_ARCH "other"
+#endif
+
 const char *proto_build_id(void)
 {
-	/* The core's version and the scene encoding's: two builds that agree on
-	 * these trace the same pixels (the same sources, flags set by the Makefile). */
-	return "portray-" PORTRAY_VERSION "/proto-" STR(PROTO_BUILD_PROTO) "/scene-" STR(PROTO_BUILD_SCENE);
+	/* Two builds that agree on all of these trace the same pixels: the same
+	 * sources (version), encodings, compiler and architecture. */
+	return "portray-" PORTRAY_VERSION "/proto-" STR(PROTO_BUILD_PROTO) "/scene-" STR(PROTO_BUILD_SCENE) "/" BUILD_CC
+	       "/" BUILD_ARCH;
 }
 
 const char *proto_type_name(int type)

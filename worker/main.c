@@ -42,7 +42,7 @@
 /* default scene cache budget, MiB of encoded scene bytes */
 #define WK_CACHE_MB_DEFAULT 1024
 
-enum wk_fault { FAULT_NONE, FAULT_BAD_CHECKSUM, FAULT_WRONG_SIZE, FAULT_PROTO_VERSION, FAULT_BLACK };
+enum wk_fault { FAULT_NONE, FAULT_BAD_CHECKSUM, FAULT_WRONG_SIZE, FAULT_PROTO_VERSION, FAULT_BUILD, FAULT_BLACK };
 
 /* ---- options and global state ---- */
 
@@ -412,7 +412,7 @@ static void send_hello(struct wk_conn *c)
 	h.secret = opt.secret != NULL;
 	h.threads = (uint16_t)(opt.threads > 65535 ? 65535 : opt.threads);
 	memcpy(h.nonce, c->nonce, PROTO_NONCE_BYTES);
-	snprintf(h.build, sizeof h.build, "%s", proto_build_id());
+	snprintf(h.build, sizeof h.build, "%s%s", proto_build_id(), opt.fault == FAULT_BUILD ? "-other" : "");
 	if (opt.fault == FAULT_PROTO_VERSION) {
 		h.version = PROTO_VERSION + 1;
 		proto_conn_set_version(c->pc, (uint16_t)(PROTO_VERSION + 1));
@@ -1033,6 +1033,8 @@ int main(int argc, char **argv)
 				opt.fault = FAULT_WRONG_SIZE;
 			else if (strcmp(optarg, "proto-version") == 0)
 				opt.fault = FAULT_PROTO_VERSION;
+			else if (strcmp(optarg, "build-id") == 0)
+				opt.fault = FAULT_BUILD;
 			else if (strcmp(optarg, "black") == 0)
 				opt.fault = FAULT_BLACK;
 			else {

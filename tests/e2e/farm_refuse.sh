@@ -36,6 +36,18 @@ grep -q "protocol version mismatch: worker speaks version 2, master speaks 1" "$
 grep -q "refused: protocol version mismatch: master speaks version 1, worker speaks 2" "$T/v.log" ||
 	fail "version mismatch: worker message unclear"
 
+# another core build: its pixels could differ
+start_worker bld -j 1 --test-fault build-id
+"$BIN/portray-master" "$SCENE" -o "$T/x.ppm" --no-local -w "127.0.0.1:$bld_PORT" 2>"$T/m5.log"
+[ $? -eq 69 ] || fail "build mismatch: wrong exit code"
+grep -q "core build mismatch: worker runs '.*-other', master runs" "$T/m5.log" || fail "build mismatch: master message unclear"
+i=0
+until grep -q "peer says: core build mismatch" "$T/bld.log"; do
+	i=$((i + 1))
+	[ $i -gt 40 ] && fail "build mismatch: the worker was not told"
+	sleep 0.05
+done
+
 # all workers refused but local threads allowed: the render completes locally
 "$BIN/portray-master" "$SCENE" -o "$T/l.ppm" -w "127.0.0.1:$v_PORT,127.0.0.1:$s_PORT" 2>"$T/m4.log" ||
 	fail "render with only refused workers failed"
