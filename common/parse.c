@@ -198,6 +198,13 @@ static void warn_at(struct parser *P, const struct token *t, const char *fmt, ..
 	va_end(ap);
 }
 
+/* Where token t stands in the current file, for the scene model. */
+static struct src_loc loc_at(const struct parser *P, const struct token *t)
+{
+	struct src_loc l = { P->file, t->line, t->col };
+	return l;
+}
+
 /* ---- tokens ------------------------------------------------------------------ */
 
 static void next(struct parser *P)
@@ -905,9 +912,7 @@ static int parse_prim(struct parser *P, struct primctx *c, mat34 *xf, bool *has_
 		[KW_CSG] = PRIM_CSG, [KW_DISK] = PRIM_DISK, [KW_POLYGON] = PRIM_POLYGON,
 	};
 	scene_object_defaults(&c->o, kinds[open.kw]);
-	c->o.loc.file = P->file;
-	c->o.loc.line = open.line;
-	c->o.loc.col = open.col;
+	c->o.loc = loc_at(P, &open);
 	if (c->o.kind == PRIM_CSG)
 		return parse_csg(P, c, &open, depth);
 	if (c->o.kind == PRIM_RAW) {
@@ -996,9 +1001,7 @@ static int parse_reference(struct parser *P, struct primctx *c, mat34 *xf, bool 
 	}
 	scene_object_defaults(&c->o, PRIM_INSTANCE);
 	c->o.u.instance.define = d;
-	c->o.loc.file = P->file;
-	c->o.loc.line = open.line;
-	c->o.loc.col = open.col;
+	c->o.loc = loc_at(P, &open);
 	*depth = P->def_depth[d];
 	next(P);
 	for (;;) {
@@ -1303,9 +1306,7 @@ static int parse_material(struct parser *P, const struct token *open, bool need_
 {
 	struct scene_material m;
 	scene_material_defaults(&m);
-	m.loc.file = P->file;
-	m.loc.line = open->line;
-	m.loc.col = open->col;
+	m.loc = loc_at(P, open);
 	uint32_t called = SCENE_NONE;
 	char called_name[LIM_TOKEN_LEN + 1] = "";
 	struct token first_setting = { 0 }, shader_tok = { 0 };
@@ -1457,9 +1458,7 @@ static int parse_filter(struct parser *P, struct scene_camera *cam, bool *cache_
 	struct scene_filter *f = &cam->filters[cam->n_filters];
 	bool *given = &cache_given[cam->n_filters];
 	scene_filter_defaults(f, k);
-	f->loc.file = P->file;
-	f->loc.line = open.line;
-	f->loc.col = open.col;
+	f->loc = loc_at(P, &open);
 	*given = false;
 	cam->n_filters++;
 	next(P);
@@ -1559,9 +1558,7 @@ static int parse_camera(struct parser *P)
 	scene_camera_defaults(&cam);
 	cam.n_filters = 0;
 	cam.set = true;
-	cam.loc.file = P->file;
-	cam.loc.line = open.line;
-	cam.loc.col = open.col;
+	cam.loc = loc_at(P, &open);
 	next(P);
 	for (;;) {
 		struct token kw = P->tok;
@@ -1611,9 +1608,7 @@ static int parse_image(struct parser *P)
 	struct scene_image im;
 	scene_image_defaults(&im);
 	im.set = true;
-	im.loc.file = P->file;
-	im.loc.line = open.line;
-	im.loc.col = open.col;
+	im.loc = loc_at(P, &open);
 	next(P);
 	for (;;) {
 		struct token kw = P->tok;
@@ -1667,9 +1662,7 @@ static int parse_light(struct parser *P)
 	struct scene_light l;
 	bool have_samples = false;
 	scene_light_defaults(&l);
-	l.loc.file = P->file;
-	l.loc.line = open.line;
-	l.loc.col = open.col;
+	l.loc = loc_at(P, &open);
 	next(P);
 	for (;;) {
 		struct token kw = P->tok;
@@ -1750,9 +1743,7 @@ static int parse_define_object(struct parser *P, const struct token *open)
 	uint32_t cap = 0;
 	unsigned depth = 0;
 	int rc = 0;
-	d.loc.file = P->file;
-	d.loc.line = open->line;
-	d.loc.col = open->col;
+	d.loc = loc_at(P, open);
 	for (;;) {
 		struct token kw = P->tok;
 		if (kw.kind == TK_SEMI)

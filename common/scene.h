@@ -85,7 +85,7 @@ struct scene_filter {
 struct scene_camera {
 	vec3 look_at;   /* default (0 0 0) */
 	vec3 drop_line; /* default (0 -1 0): the image's downward direction */
-	vec3 look_from; /* default (0 0 -10)... see docs/language.md */
+	vec3 look_from; /* default (0 0 10): on +z, looking at the origin */
 	double depth;   /* default 0.028 */
 	double x_size;  /* default 0.032: film width  -> image width */
 	double y_size;  /* default 0.024: film height -> image height */
