@@ -45,6 +45,7 @@ static const struct {
 	{ "tran-color", KW_TRAN_COLOUR },
 	{ "center", KW_CENTRE },
 	{ "varience", KW_VARIANCE }, /* the manual's spelling */
+	{ "diffuse-relection", KW_DIFFUSE_REFLECTION }, /* the manual's material text */
 	{ "supersample", KW_SUPER_SAMPLE },
 	{ "checkers", KW_CHEQUERS },
 };

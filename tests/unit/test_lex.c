@@ -119,6 +119,7 @@ static void test_keywords(void)
 	CHECK(lex_keyword("center", 6) == KW_CENTRE);
 	CHECK(lex_keyword("VARIENCE", 8) == KW_VARIANCE);
 	CHECK(lex_keyword("diff-color", 10) == KW_DIFF_COLOUR);
+	CHECK(lex_keyword("Diffuse-Relection", 17) == KW_DIFFUSE_REFLECTION); /* the manual's 8.x text */
 	CHECK(lex_keyword("flat-red", 8) == KW_NONE);
 	CHECK(lex_keyword("", 0) == KW_NONE);
 	/* every keyword finds itself, in upper case too */
