@@ -7,8 +7,19 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "common/filter.h"
 #include "common/parse.h"
 #include "master/master.h"
+
+/* Room for the filter warnings of a camera (LIM_FILTERS lines). */
+#define WARN_BUF 4096
+
+void master_filter_warnings(const struct scene_camera *c)
+{
+	char warn[WARN_BUF];
+	if (filter_warnings(c, warn, sizeof warn))
+		fputs(warn, stderr);
+}
 
 /* Prints the filters as "standard, lens (samples 10, radius 0.1, focal-length 30)". */
 static void print_filters(const struct scene_camera *c)
@@ -61,6 +72,7 @@ int master_check(const struct master_opts *o)
 		fprintf(stderr, "%s\n", err.msg);
 		return rc;
 	}
+	master_filter_warnings(&s->camera);
 	struct scene_stats st;
 	scene_stats(s, &st);
 	uint32_t shaped = 0;

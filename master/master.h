@@ -31,6 +31,11 @@ struct master_opts {
 	double heartbeat_s;    /* --heartbeat-timeout S (farm) */
 };
 
+struct scene_camera;
+/* Prints the camera's ignored-filter warnings (filter_warnings) on stderr:
+ * --check and rendering say the same (master/check.c). */
+void master_filter_warnings(const struct scene_camera *c);
+
 /* master/check.c: parse everything, print the summary, return the error level. */
 int master_check(const struct master_opts *o);
 /* master/render.c: load, render (locally or on the farm), write; exit code. */

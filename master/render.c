@@ -18,9 +18,6 @@
 #include "master/master.h"
 #include "master/progress.h"
 
-/* Room for the filter warnings of a camera (LIM_FILTERS lines). */
-#define WARN_BUF 4096
-
 /*
  * Default output: the scene file's name without directory and extension,
  * plus ".png", in the current directory. Returns a malloc'd string (caller
@@ -63,9 +60,7 @@ int master_render(const struct master_opts *o)
 		fprintf(stderr, "%s\n", err.msg);
 		goto done;
 	}
-	char warn[WARN_BUF];
-	if (filter_warnings(&s->camera, warn, sizeof warn))
-		fputs(warn, stderr);
+	master_filter_warnings(&s->camera);
 	double t_parse = progress_now();
 
 	rc = renderer_new(s, &r, &err);

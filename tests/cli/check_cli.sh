@@ -53,6 +53,12 @@ grep -q "w.sce:1:8: warning: filter lens before the first standard or adaptive f
 	fail "warning text: $(cat "$T/err")"
 grep -qx 'filters: standard' "$T/out" || fail "filters after the warning"
 
+# a second adaptive filter is ignored with a warning, under --check as when rendering
+printf 'camera filter standard ; filter adaptive ; ;\n' >"$T/w2.sce"
+"$M" --check "$T/w2.sce" >"$T/out" 2>"$T/err" || fail "second base filter case failed"
+grep -q "w2.sce:1:26: warning: filter adaptive ignored: only the first standard or adaptive filter samples the pixel" "$T/err" ||
+	fail "second base filter warning: $(cat "$T/err")"
+
 # a summary that cannot be written is an I/O error (74), not success
 if [ -w /dev/full ]; then
 	"$M" --check "$T/s.sce" >/dev/full 2>"$T/err"
