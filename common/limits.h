@@ -42,6 +42,10 @@
 #define LIM_FILTERS 16
 /* samples of any one filter or light; keeps rays per pixel bounded */
 #define LIM_SAMPLES 4096
+/* eye rays the layered filters (super-sample, disk, lens) multiply each
+ * base sample into: the manual's 900 is "obviously too many"; past 2^20 a
+ * layered camera (4096^16 otherwise) would never finish a pixel */
+#define LIM_RAYS_PER_SAMPLE (1u << 20)
 /* adaptive filter max-depth: 2^depth sub-pixels per side */
 #define LIM_ADAPTIVE_DEPTH 8
 /* image size in pixels, per side and in total (RGB8 buffer fits easily) */

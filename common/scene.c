@@ -298,9 +298,21 @@ int scene_set_camera(struct scene *s, const struct scene_camera *c, struct scene
 				    LOCARGS(&c->loc));
 	if (c->n_filters < 0 || c->n_filters > LIM_FILTERS)
 		return scene_errorf(err, 1, LOCFMT "too many filters", LOCARGS(&c->loc));
-	for (int i = 0; i < c->n_filters; i++)
-		if (check_filter(&c->filters[i], err))
+	uint64_t rays = 1; /* every multiplying filter counted, ignored ones too */
+	for (int i = 0; i < c->n_filters; i++) {
+		const struct scene_filter *f = &c->filters[i];
+		if (check_filter(f, err))
 			return err->level;
+		if (f->kind == FILTER_SUPERSAMPLE)
+			rays *= (uint64_t)f->x_samples * (uint64_t)f->y_samples;
+		else if (f->kind == FILTER_DISK || f->kind == FILTER_LENS)
+			rays *= (uint64_t)f->samples;
+		if (rays > LIM_RAYS_PER_SAMPLE)
+			return scene_errorf(err, 1, LOCFMT "filter %s: the filters so far trace %llu rays per "
+						     "sample (at most %u)",
+					    LOCARGS(&f->loc), scene_filter_name(f->kind), (unsigned long long)rays,
+					    LIM_RAYS_PER_SAMPLE);
+	}
 	s->camera = *c;
 	return 0;
 }
