@@ -83,6 +83,9 @@ struct parser {
 	char **mesh_path;
 	uint32_t cap_mesh_path;
 	int csg_depth, shader_depth;
+	/* the defined object being read (its name once written), for messages */
+	const char *defining;
+	int defining_line;
 	/* name -> latest index, for materials and defines (case-insensitive) */
 	struct name_table mat_names, def_names;
 };
@@ -994,6 +997,10 @@ static int parse_reference(struct parser *P, struct primctx *c, mat34 *xf, bool 
 	tok_str(&open, name);
 	uint32_t d = find_define(P, name);
 	if (d == SCENE_NONE) {
+		if (P->defining && strcasecmp(P->defining, name) == 0)
+			return err_at(P, ERRLEVEL_FATAL, &open,
+				      "undefined complex object '%s': its definition (line %d) is not closed "
+				      "yet (';' missing?)", name, P->defining_line);
 		const struct token *nx = peek(P);
 		if (nx->kind == TK_SEMI || (nx->kind == TK_WORD && (is_transform_kw(nx->kw) || nx->kw == KW_MATERIAL)))
 			return err_at(P, ERRLEVEL_FATAL, &open, "undefined complex object '%s'", name);
@@ -1160,7 +1167,10 @@ static int parse_fades_list(struct parser *P, const struct token *kw, struct sce
 			return err_near(P, &P->tok, "too many fades entries (at most %d)", LIM_FADES_ENTRIES);
 		struct fades_entry e = { 0, v3(0, 0, 0), SCENE_NONE };
 		struct token dtok = P->tok;
-		TRY(read_num(P, &dtok, &e.dist, R_NONNEG));
+		if (dtok.kind != TK_WORD || dtok.num == NUM_NO)
+			return err_near(P, &dtok, "distance expected in the '%.*s' list (it ends with an entry "
+						  "whose distance is 0)", (int)kw->len, kw->text);
+		TRY(read_num(P, kw, &e.dist, R_NONNEG));
 		if (materials)
 			TRY(parse_matarg(P, kw, &e.material));
 		else
@@ -1761,6 +1771,8 @@ static int parse_define_object(struct parser *P, const struct token *open)
 			}
 			if ((rc = read_name(P, &kw, &d.name)) != 0)
 				goto fail;
+			P->defining = d.name;
+			P->defining_line = open->line;
 			continue;
 		}
 		if (is_kw(P, KW_OBJECT)) {
@@ -1795,6 +1807,7 @@ static int parse_define_object(struct parser *P, const struct token *open)
 		goto fail;
 	}
 	uint32_t id;
+	P->defining = NULL;
 	if ((rc = scene_add_define(P->s, &d, &id, P->err)) != 0)
 		return rc; /* the scene freed d's arrays */
 	if (names_put(&P->def_names, id, def_name, P->s) < 0)
@@ -1805,6 +1818,7 @@ static int parse_define_object(struct parser *P, const struct token *open)
 	next(P);
 	return 0;
 fail:
+	P->defining = NULL;
 	free(d.name);
 	free(d.objects);
 	return rc;
