@@ -17,13 +17,15 @@ start_worker() { # name, options: sets NAME_PORT
 	n=$1
 	shift
 	"$BIN/portray-worker" --listen 127.0.0.1:0 --port-file "$T/$n.port" "$@" >/dev/null 2>"$T/$n.log" &
-	PIDS="$PIDS $!"
+	pid=$!
+	PIDS="$PIDS $pid"
 	i=0
 	while [ ! -s "$T/$n.port" ] && [ $i -lt 100 ]; do
 		sleep 0.05
 		i=$((i + 1))
 	done
 	eval "${n}_PORT=$(cat "$T/$n.port")"
+	eval "${n}_PID=$pid"
 }
 
 start_worker a -j 1
@@ -51,6 +53,24 @@ cmp -s "$T/local.ppm" "$T/farm.ppm" && same=identical
 awk -v tl="$tl" -v tf="$tf" -v s="$SIZE" -v same="$same" 'BEGIN {
 	printf "farm efficiency: %s at %s, best of 3: local -j 2 %.2f s, master + 2 workers (-j 1, --no-local) %.2f s: %.0f%% (target >= 90%%), image %s\n",
 	       "balls_s4", s, tl, tf, 100 * tl / tf, same }'
+# the same comparison in CPU seconds, which a loaded machine does not skew:
+# the local render's CPU against the two workers' (from /proc)
+# (times must run in this shell, not in a $(...) subshell)
+child_cpu() { awk 'NR == 2 { split($1, u, /[ms]/); split($2, s, /[ms]/); print u[1] * 60 + u[2] + s[1] * 60 + s[2] }' "$T/times"; }
+proc_cpu() { awk -v hz="$(getconf CLK_TCK)" '{ print ($14 + $15) / hz }' "/proc/$1/stat" 2>/dev/null || echo 0; }
+if [ -r "/proc/$a_PID/stat" ]; then
+	times >"$T/times"
+	c0=$(child_cpu)
+	"$BIN/portray-master" "$SCENE" --size "$SIZE" -o "$T/local.ppm" -j 2 -q || exit 1
+	times >"$T/times"
+	c1=$(child_cpu)
+	a0=$(proc_cpu "$a_PID")
+	b0=$(proc_cpu "$b_PID")
+	"$BIN/portray-master" "$SCENE" --size "$SIZE" -o "$T/farm.ppm" -w "$W" --no-local -q || exit 1
+	awk -v c0="$c0" -v c1="$c1" -v a0="$a0" -v a1="$(proc_cpu "$a_PID")" -v b0="$b0" -v b1="$(proc_cpu "$b_PID")" 'BEGIN {
+		l = c1 - c0; w = (a1 - a0) + (b1 - b0);
+		printf "  CPU: local render %.2f s (parse, build, trace), workers %.2f s: %.0f%%\n", l, w, (w > 0 ? 100 * l / w : 0) }'
+fi
 grep "farm: bytes sent" "$T/farm.log" | sed 's/^portray-master: /  /'
 awk '/received/ { for (i = 1; i <= NF; i++) if ($i == "received") r += $(i + 1) } END { printf "  bytes received (tile results) %d\n", r }' "$T/farm.log"
 
