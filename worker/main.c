@@ -357,22 +357,7 @@ static void hex8(const uint8_t *h, char out[17])
 		snprintf(out + 2 * i, 3, "%02x", h[i]);
 }
 
-/* Sends ERROR and moves to closing (the loop closes once the error is flushed). */
-static void conn_fail(struct wk_conn *c, int code, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
-static void conn_fail(struct wk_conn *c, int code, const char *fmt, ...)
-{
-	char text[LIM_ERROR_TEXT + 1];
-	va_list ap;
-	va_start(ap, fmt);
-	vsnprintf(text, sizeof text, fmt, ap);
-	va_end(ap);
-	wk_log("%s: refused: %s (%s error)", c->peer, text, proto_err_name(code));
-	proto_send_error(c->pc, code, "%s", text);
-	c->state = ST_CLOSING;
-	c->deadline = net_now() + 2.0;
-	c->logged = true;
-}
-
+/* The one log line of a job (once). */
 static void job_log(struct wk_conn *c, const char *how)
 {
 	if (c->logged || c->state < ST_BUILD)
@@ -382,6 +367,28 @@ static void job_log(struct wk_conn *c, const char *how)
 	wk_log("job %s scene %s %ux%u: %u tiles in %.2f s, scene cache %s (%llu scene bytes received), %s", c->peer,
 	       hx, c->w, c->h, c->tiles_done, net_now() - c->started, c->cache_hit ? "hit" : "miss",
 	       (unsigned long long)c->scene_len, how);
+	c->logged = true;
+}
+
+/* Sends ERROR and moves to closing (the loop closes once the error is flushed). */
+static void conn_fail(struct wk_conn *c, int code, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void conn_fail(struct wk_conn *c, int code, const char *fmt, ...)
+{
+	char text[LIM_ERROR_TEXT + 1];
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(text, sizeof text, fmt, ap);
+	va_end(ap);
+	if (c->state >= ST_BUILD && c->state != ST_CLOSING && !c->logged) {
+		char how[LIM_ERROR_TEXT + 64];
+		snprintf(how, sizeof how, "ended: %s (%s error)", text, proto_err_name(code));
+		job_log(c, how);
+	} else {
+		wk_log("%s: refused: %s (%s error)", c->peer, text, proto_err_name(code));
+	}
+	proto_send_error(c->pc, code, "%s", text);
+	c->state = ST_CLOSING;
+	c->deadline = net_now() + 2.0;
 	c->logged = true;
 }
 
