@@ -301,6 +301,9 @@ static void test_weld_random(void)
 	for (size_t round = 0; round < sizeof rounds / sizeof rounds[0]; round++) {
 		double d = rounds[round][0], base = rounds[round][1];
 		char *text = malloc(NT * 9 * 32);
+		CHECK(text != NULL);
+		if (!text)
+			break;
 		size_t o = 0;
 		for (int i = 0; i < NT * 9; i++) {
 			seed = seed * 1664525u + 1013904223u;
