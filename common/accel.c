@@ -16,7 +16,10 @@
  *   instances  (inverse transform as 12 floats, instance object): 52 bytes
  *              each, evaluated in double; the instance's geometry is exactly
  *              the inverse of that float matrix, used consistently for rays,
- *              normals and bounds
+ *              normals and bounds; a group of ACCEL_PACK_MIN or more
+ *              instances and no other bounded reference keeps them in leaf
+ *              order without reference words, in leaves of up to
+ *              ACCEL_INST_LEAF (issue 3: <= 64 bytes per instance)
  * Unbounded references (planes, CSG with an infinite extent, instances of
  * groups holding those) sit in a list tested for every ray. The BVH is
  * binned SAH (bvh.c) collapsed to 4-wide nodes; traversal is iterative with
@@ -58,6 +61,12 @@ enum { REF_SPHERE = 0, REF_TRI = 1, REF_XPRIM = 2, REF_INST = 3 };
 #define ACCEL_MAX_REFS (1u << 30)
 /* primitives per BVH leaf */
 #define ACCEL_MAX_LEAF 4
+/* instances per leaf in a group of at least ACCEL_PACK_MIN instances and
+ * nothing else bounded, every subtree this small made a leaf: fewer
+ * 128-byte nodes per instance (issue 3's budget of 64 bytes per instance)
+ * at the cost of more instance tests, so only where instances are many */
+#define ACCEL_INST_LEAF 8
+#define ACCEL_PACK_MIN 1024
 
 struct gsphere {
 	vec3 c;
@@ -90,7 +99,8 @@ struct ginst {
 
 struct group {
 	struct bvh bvh;
-	uint32_t *refs; /* bounded references in leaf order */
+	uint32_t *refs; /* bounded references in leaf order; NULL in a group of
+			   instances only: reference k is then instance k (group_ref) */
 	uint32_t n_refs;
 	uint32_t *unb;  /* unbounded references */
 	uint32_t n_unb;
@@ -314,6 +324,12 @@ static inline bool sphere_test(const struct gsphere *sp, const struct trace *r, 
 	return false;
 }
 
+/* Bounded reference k (in leaf order) of g. */
+static inline uint32_t group_ref(const struct group *g, uint32_t k)
+{
+	return g->refs ? g->refs[k] : REF_MAKE(REF_INST, k);
+}
+
 static inline const uint32_t *tri_ix(const struct gmesh *m, uint32_t tri) { return m->ix + 3 * (size_t)tri; }
 
 static void inst_matrix(const struct ginst *in, mat34 *m)
@@ -364,6 +380,28 @@ static bool inst_occluded(const struct accel *A, const struct ginst *in, const s
 
 /* The rarer kinds (xprims, CSG, instances), kept out of the traversal loop
  * so the loop keeps the ray in registers. Same contract as ref_test. */
+/* A simple primitive other than an untransformed sphere or a triangle (an
+ * xprim that is not CSG): a small frame of its own, apart from the CSG and
+ * instance paths. Same contract as ref_test. */
+static __attribute__((noinline)) bool xprim_test(const struct geom_obj *go, uint32_t ref, struct trace *r,
+						 struct cand *c)
+{
+	vec3 o = r->o, d = r->d;
+	if (go->has_xform) {
+		o = m34_point(&go->inv, o);
+		d = m34_dir(&go->inv, d);
+	}
+	double t;
+	int part;
+	if (!geom_intersect(go, o, d, r->tmin, r->tmax, &t, &part))
+		return false;
+	c->part = part;
+	c->ref = ref;
+	c->t = t;
+	r->tmax = t;
+	return true;
+}
+
 static __attribute__((noinline)) bool ref_test_slow(const struct accel *A, const struct group *g, uint32_t ref,
 						     struct trace *r, struct cand *c, bool brute)
 {
@@ -371,23 +409,13 @@ static __attribute__((noinline)) bool ref_test_slow(const struct accel *A, const
 	double t;
 	if (REF_KIND(ref) == REF_XPRIM) {
 		const struct xprim *x = &g->xp[i];
-		if (x->g->kind == PRIM_CSG) {
-			struct hit hh;
-			if (!csg_hit(A->s, (struct geom_obj *const *)A->gobj, x->obj, r->o, r->d, r->tmin, r->tmax, &hh))
-				return false;
-			t = hh.t;
-			c->sub = hh;
-		} else {
-			vec3 o = r->o, d = r->d;
-			if (x->g->has_xform) {
-				o = m34_point(&x->g->inv, o);
-				d = m34_dir(&x->g->inv, d);
-			}
-			int part;
-			if (!geom_intersect(x->g, o, d, r->tmin, r->tmax, &t, &part))
-				return false;
-			c->part = part;
-		}
+		if (x->g->kind != PRIM_CSG)
+			return xprim_test(x->g, ref, r, c);
+		struct hit hh;
+		if (!csg_hit(A->s, (struct geom_obj *const *)A->gobj, x->obj, r->o, r->d, r->tmin, r->tmax, &hh))
+			return false;
+		t = hh.t;
+		c->sub = hh;
 	} else {
 		struct hit hh;
 		if (!inst_hit(A, &g->inst[i], r, &hh, brute))
@@ -422,6 +450,12 @@ static inline __attribute__((always_inline)) bool ref_test(const struct accel *A
 		c->b1 = b1;
 		c->b2 = b2;
 		break;
+	}
+	case REF_XPRIM: {
+		const struct geom_obj *go = g->xp[i].g;
+		if (go->kind != PRIM_CSG)
+			return xprim_test(go, ref, r, c);
+		return ref_test_slow(A, g, ref, r, c, brute);
 	}
 	default:
 		return ref_test_slow(A, g, ref, r, c, brute);
@@ -573,12 +607,12 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 			}
 		}
 		for (uint32_t k = 0; k < g->n_refs; k++)
-			if (REF_KIND(g->refs[k]) >= REF_XPRIM)
-				found |= ref_test(A, g, g->refs[k], r, &best, true);
+			if (REF_KIND(group_ref(g, k)) >= REF_XPRIM)
+				found |= ref_test(A, g, group_ref(g, k), r, &best, true);
 	} else if (g->bvh.root_n) { /* the root is one leaf */
 		if (box_hit(g->bvh.root_b, g->center, r))
 			for (uint32_t k = 0; k < g->bvh.root_n; k++)
-				found |= ref_test(A, g, g->refs[g->bvh.root_idx + k], r, &best, false);
+				found |= ref_test(A, g, group_ref(g, g->bvh.root_idx + k), r, &best, false);
 	} else if (g->bvh.n_nodes4) {
 		const struct bvh4 *nodes = g->bvh.nodes;
 		struct ray4 q;
@@ -594,7 +628,7 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 		for (;;) {
 			if (n) {
 				for (uint32_t k = 0; k < n; k++)
-					found |= ref_test(A, g, g->refs[idx + k], r, &best, false);
+					found |= ref_test(A, g, group_ref(g, idx + k), r, &best, false);
 				tmax = (float)(r->tmax * q.tscale);
 			} else {
 				const struct bvh4 *nd = &nodes[idx];
@@ -666,7 +700,7 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 	if (g->bvh.root_n) {
 		if (box_hit(g->bvh.root_b, g->center, r))
 			for (uint32_t k = 0; k < g->bvh.root_n; k++)
-				if (ref_occludes(A, g, g->refs[g->bvh.root_idx + k], r))
+				if (ref_occludes(A, g, group_ref(g, g->bvh.root_idx + k), r))
 					return true;
 		return false;
 	}
@@ -684,7 +718,7 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 	for (;;) {
 		if (n) {
 			for (uint32_t k = 0; k < n; k++)
-				if (ref_occludes(A, g, g->refs[idx + k], r))
+				if (ref_occludes(A, g, group_ref(g, idx + k), r))
 					return true;
 		} else {
 			const struct bvh4 *nd = &nodes[idx];
@@ -1189,23 +1223,47 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 		boxes[k].lo = v3_sub(boxes[k].lo, pad);
 		boxes[k].hi = v3_add(boxes[k].hi, pad);
 	}
+	/* a group whose bounded references are ACCEL_PACK_MIN or more instances
+	 * and nothing else keeps its instance records in leaf order instead of a
+	 * reference array, and packs its leaves (see ACCEL_INST_LEAF) */
+	bool inst_only = n_bounded >= ACCEL_PACK_MIN;
+	for (uint32_t k = 0; k < n_bounded && inst_only; k++)
+		inst_only = REF_KIND(all[k]) == REF_INST;
 	perm = malloc((n_bounded ? n_bounded : 1) * sizeof *perm);
-	g->refs = malloc((n_bounded ? n_bounded : 1) * sizeof *g->refs);
-	if (!perm || !g->refs)
+	if (!inst_only)
+		g->refs = malloc((n_bounded ? n_bounded : 1) * sizeof *g->refs);
+	if (!perm || (!inst_only && !g->refs))
 		goto oom;
-	if (bvh_build(&g->bvh, boxes, n_bounded, perm, ACCEL_MAX_LEAF) < 0)
+	if (bvh_build_ex(&g->bvh, boxes, n_bounded, perm, inst_only ? ACCEL_INST_LEAF : ACCEL_MAX_LEAF, inst_only) < 0)
 		goto oom;
 	g->bounds = geom_box_empty();
-	for (uint32_t k = 0; k < n_bounded; k++) {
-		g->refs[k] = all[perm[k]];
+	for (uint32_t k = 0; k < n_bounded; k++)
 		g->bounds = geom_box_union(g->bounds, boxes[k]);
+	if (inst_only) { /* bounded instances in leaf order, then the unbounded ones */
+		struct ginst *ord = malloc((size_t)g->n_inst * sizeof *ord);
+		if (!ord)
+			goto oom;
+		for (uint32_t k = 0; k < n_bounded; k++)
+			ord[k] = g->inst[REF_IDX(all[perm[k]])];
+		uint32_t next = n_bounded;
+		for (uint32_t k = 0; k < g->n_unb; k++)
+			if (REF_KIND(g->unb[k]) == REF_INST) {
+				ord[next] = g->inst[REF_IDX(g->unb[k])];
+				g->unb[k] = REF_MAKE(REF_INST, next++);
+			}
+		free(g->inst);
+		g->inst = ord;
+	} else {
+		for (uint32_t k = 0; k < n_bounded; k++)
+			g->refs[k] = all[perm[k]];
 	}
 	if (n_bounded) { /* back to the group's space, covering the padding */
 		g->bounds.lo = v3_add(g->bounds.lo, g->center);
 		g->bounds.hi = v3_add(g->bounds.hi, g->center);
 		g->bounds = pad_box(g->bounds);
 	}
-	g->bytes += (size_t)g->bvh.n_nodes4 * sizeof(struct bvh4) + (size_t)(n_bounded + n_unb) * sizeof(uint32_t);
+	g->bytes += (size_t)g->bvh.n_nodes4 * sizeof(struct bvh4) +
+		    (size_t)((inst_only ? 0 : n_bounded) + n_unb) * sizeof(uint32_t);
 	A->st.n_nodes += g->bvh.n_nodes4;
 	A->st.bytes += g->bytes;
 	free(perm);

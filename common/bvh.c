@@ -19,6 +19,7 @@ struct bvh_ctx {
 	struct bvh_node *nodes;
 	uint32_t n_nodes;
 	uint32_t max_leaf;
+	bool pack;
 };
 
 static float round_down(double x)
@@ -78,7 +79,7 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 	nd->b[0] = round_down(bb.lo.x), nd->b[1] = round_down(bb.lo.y), nd->b[2] = round_down(bb.lo.z);
 	nd->b[3] = round_up(bb.hi.x), nd->b[4] = round_up(bb.hi.y), nd->b[5] = round_up(bb.hi.z);
 	uint32_t n = end - begin;
-	if (n <= 1 || depth >= BVH_MAX_DEPTH - 1)
+	if (n <= 1 || depth >= BVH_MAX_DEPTH - 1 || (B->pack && n <= B->max_leaf))
 		goto leaf;
 
 	double best = INFINITY;
@@ -236,10 +237,16 @@ static uint32_t collapse(const struct bvh_node *nodes, uint32_t ni, struct bvh4 
 
 int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf)
 {
+	return bvh_build_ex(b, boxes, n, perm, max_leaf, false);
+}
+
+int bvh_build_ex(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf,
+		 bool pack)
+{
 	memset(b, 0, sizeof *b);
 	if (n == 0)
 		return 0;
-	struct bvh_ctx B = { boxes, NULL, perm, NULL, 1, max_leaf ? max_leaf : 1 };
+	struct bvh_ctx B = { boxes, NULL, perm, NULL, 1, max_leaf ? max_leaf : 1, pack };
 	B.cent = malloc((size_t)n * sizeof *B.cent);
 	B.nodes = malloc((size_t)2 * n * sizeof *B.nodes);
 	if (!B.cent || !B.nodes) {

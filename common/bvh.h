@@ -6,6 +6,7 @@
 #ifndef PORTRAY_BVH_H
 #define PORTRAY_BVH_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "common/geom.h"
@@ -52,6 +53,11 @@ struct bvh {
  * (n_nodes == 0). Returns 0, or -1 when out of memory.
  */
 int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf);
+/* The same; with pack, every subtree of at most max_leaf items is a leaf
+ * (fewer, fuller leaves: less memory where items are many and costly to
+ * store, such as instances), else the SAH decides as in bvh_build. */
+int bvh_build_ex(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf,
+		 bool pack);
 void bvh_free(struct bvh *b);
 
 #endif

@@ -5,7 +5,8 @@
  * or miss, t within 1e-9 relative, the same object (a different object is
  * accepted only at an exact tie in t, and such ties are counted). Also the
  * builder alone: every item lands in exactly one leaf, leaves cover their
- * items' boxes, and degenerate inputs (equal centroids) build.
+ * items' boxes, and degenerate inputs (equal centroids) build; packed
+ * leaves; a group of many instances (packed, without a reference array).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -320,6 +321,79 @@ static void mixed(void)
 	scene_free(s);
 }
 
+/* A define under a random rotation and translation in the 10-unit cube. */
+static uint32_t random_instance(struct scene *s, uint32_t define, uint64_t seed)
+{
+	struct scene_error err;
+	struct scene_object o;
+	scene_object_defaults(&o, PRIM_INSTANCE);
+	o.u.instance.define = define;
+	scene_xform_op(&o.xform, XF_ROTATE, (int)(3 * rng_uniform(seed, 1)), 360 * rng_uniform(seed, 2), v3(0, 0, 0));
+	scene_xform_op(&o.xform, XF_TRANSLATE, 0, 0,
+		       v3(10 * rng_uniform(seed, 3), 10 * rng_uniform(seed, 4), 10 * rng_uniform(seed, 5)));
+	o.has_xform = true;
+	uint32_t id;
+	CHECK(scene_add_object(s, &o, &id, &err) == 0);
+	return id;
+}
+
+/* A root group of 1,500 instances and nothing else bounded (kept in leaf
+ * order with packed leaves, no reference array) beside unbounded instances
+ * (of a define holding a plane) and a plane: BVH, brute force and occlusion
+ * agree on 6,000 rays. */
+static void many_instances(void)
+{
+	struct scene *s = scene_new();
+	struct scene_error err;
+	uint32_t m[3];
+	for (int i = 0; i < 3; i++)
+		m[i] = random_prim(s, rng_seed(4, i, 0), v3(0.1 * i, 0, 0), i == 0 ? 0 : i == 1 ? 1 : 5);
+	struct scene_define d;
+	memset(&d, 0, sizeof d);
+	d.name = strdup("small");
+	d.n_objects = 3;
+	d.objects = malloc(3 * sizeof *d.objects);
+	memcpy(d.objects, m, sizeof m);
+	uint32_t small;
+	CHECK(scene_add_define(s, &d, &small, &err) == 0);
+	struct scene_object pl;
+	scene_object_defaults(&pl, PRIM_PLANE);
+	pl.u.plane.position = v3(0, -3, 0);
+	uint32_t pid;
+	CHECK(scene_add_object(s, &pl, &pid, &err) == 0);
+	memset(&d, 0, sizeof d);
+	d.name = strdup("floor");
+	d.n_objects = 1;
+	d.objects = malloc(sizeof *d.objects);
+	d.objects[0] = pid;
+	uint32_t floor;
+	CHECK(scene_add_define(s, &d, &floor, &err) == 0);
+	for (int i = 0; i < 1500; i++) {
+		CHECK(scene_add_root(s, random_instance(s, small, rng_seed(5, i, 0)), &err) == 0);
+		if (i % 700 == 0)
+			CHECK(scene_add_root(s, random_instance(s, floor, rng_seed(6, i, 0)), &err) == 0);
+	}
+	scene_object_defaults(&pl, PRIM_PLANE);
+	pl.u.plane.position = v3(0, 20, 0);
+	CHECK(scene_add_object(s, &pl, &pid, &err) == 0);
+	CHECK(scene_add_root(s, pid, &err) == 0);
+	struct accel *a;
+	CHECK(accel_build(s, &a, &err) == 0);
+	struct job j;
+	memset(&j, 0, sizeof j);
+	j.a = a;
+	CHECK(accel_bounds(a, &j.lo, &j.hi));
+	j.seed = rng_seed(7, 1, 2);
+	j.to = 6000;
+	run_rays(&j);
+	printf("1,500 instances in packed leaves, unbounded instances, a plane: %d rays, %d hits, %d mismatches\n",
+	       j.to, j.hits, j.mismatch);
+	CHECK(j.mismatch == 0);
+	CHECK(j.hits > j.to / 2);
+	accel_free(a);
+	scene_free(s);
+}
+
 /* Builder invariants on random boxes and on boxes with one centroid. */
 static void builder(void)
 {
@@ -366,6 +440,22 @@ static void builder(void)
 			bad += seen[i] != 1;
 		CHECK(covered == n);
 		CHECK(bad == 0);
+		/* packed: no leaf above 8 items, no interior node over 8 or fewer */
+		struct bvh bp;
+		CHECK(bvh_build_ex(&bp, bx, n, perm, 8, true) == 0);
+		uint32_t packed_items = 0;
+		for (uint32_t ni = 0; ni < bp.n_nodes4; ni++)
+			for (int c = 0; c < 4; c++) {
+				const struct bvh4 *p = &bp.nodes[ni];
+				if (!isnan(p->lo[0][c]) && p->n[c]) {
+					bad += trial == 0 && p->n[c] > 8;
+					packed_items += p->n[c];
+				}
+			}
+		CHECK(packed_items == n);
+		CHECK(trial == 1 || bp.n_nodes4 < b.n_nodes4);
+		bvh_free(&bp);
+		CHECK(bad == 0);
 		/* a single item: the root is a leaf */
 		struct bvh b1;
 		CHECK(bvh_build(&b1, bx, 1, perm, 4) == 0);
@@ -383,6 +473,7 @@ int main(void)
 	builder();
 	far_away();
 	mixed();
+	many_instances();
 	static const char *const scenes[] = { "tests/data/spd/balls_s4.sce", "tests/data/spd/gears_s2.sce",
 					      "tests/data/spd/rings_s3.sce", "tests/data/spd/tetra_s4.sce",
 					      "tests/data/meshes/spot.sce" };
