@@ -121,7 +121,20 @@ static int wait_key(int ms)
 static void *key_thread(void *arg)
 {
 	(void)arg;
+	/* With SIGTTIN blocked in this thread, a read from the terminal while we
+	 * are in the background fails with EIO instead of stopping the process
+	 * (the foreground check below leaves a window between poll and read). */
+	sigset_t ttin;
+	sigemptyset(&ttin);
+	sigaddset(&ttin, SIGTTIN);
+	pthread_sigmask(SIG_BLOCK, &ttin, NULL);
 	while (!atomic_load(&g_stop)) {
+		if (tcgetpgrp(STDIN_FILENO) != getpgrp()) {
+			/* in the background (the shell's `bg`): the keys are the
+			 * shell's, and reading would stop us with SIGTTIN */
+			poll(NULL, 0, KEY_POLL_MS);
+			continue;
+		}
 		int w = wait_key(KEY_POLL_MS);
 		if (w < 0)
 			break;
@@ -132,6 +145,10 @@ static void *key_thread(void *arg)
 		if (n <= 0) {
 			if (n < 0 && (errno == EINTR || errno == EAGAIN))
 				continue;
+			if (n < 0 && errno == EIO) { /* moved to the background meanwhile */
+				poll(NULL, 0, KEY_POLL_MS);
+				continue;
+			}
 			break; /* EOF: no more keys */
 		}
 		int stop = ch == 'q' || ch == 'Q';
