@@ -6,13 +6,7 @@
 # python3, plays the shell.
 . tests/cli/render_lib.inc
 command -v python3 >/dev/null 2>&1 || { echo "python3 not installed: skipped"; exit 0; }
-cat >"$TMP/slow.sce" <<'SCE'
-camera look-from (0 5 0.01) look-at (0 0 0) drop-line (0 0 1) depth 1 x-size 1 y-size 1
-  filter standard ; filter super-sample x-samples 8 y-samples 8 ; ;
-image xsize 300 ysize 300 ;
-light position (0 4 0) shape sphere centre (0 4 0) radius 0.5 ; samples 4 ;
-object plane position (0 -1 0) normal (0 1 0) ; ;
-SCE
+slow_scene "$TMP/slow.sce" 300
 python3 - "$MASTER" "$TMP/slow.sce" "$TMP/bg.ppm" <<'PY' || fail "see above"
 import fcntl, os, pty, signal, sys, termios, time
 master, scene, out = sys.argv[1:4]

@@ -7,15 +7,6 @@ if ! command -v script >/dev/null 2>&1; then
 	echo "script(1) not installed: skipped"
 	exit 0
 fi
-slow_scene() { # FILE SIDE [nonstop]
-	cat >"$1" <<SCE
-camera look-from (0 5 0.01) look-at (0 0 0) drop-line (0 0 1) depth 1 x-size 1 y-size 1
-  filter standard ; filter super-sample x-samples 8 y-samples 8 ; ;
-image xsize $2 ysize $2 $3 ;
-light position (0 4 0) shape sphere centre (0 4 0) radius 0.5 ; samples 4 ;
-object plane position (0 -1 0) normal (0 1 0) ; ;
-SCE
-}
 # on_tty KEYS DELAY LOG COMMAND: runs COMMAND on a pty, typing KEYS after DELAY s
 on_tty() {
 	(sleep "$2"; printf "$1"; sleep 1) | script -qec "$4" /dev/null >"$3" 2>&1

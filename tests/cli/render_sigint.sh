@@ -3,14 +3,7 @@
 # valid image, unfinished tiles black, a message saying how much is done,
 # exit 130.
 . tests/cli/render_lib.inc
-# a plane filling the view: every finished pixel is lit
-cat >"$TMP/slow.sce" <<'SCE'
-camera look-from (0 5 0.01) look-at (0 0 0) drop-line (0 0 1) depth 1 x-size 1 y-size 1
-  filter standard ; filter super-sample x-samples 8 y-samples 8 ; ;
-image xsize 600 ysize 600 ;
-light position (0 4 0) shape sphere centre (0 4 0) radius 0.5 ; samples 4 ;
-object plane position (0 -1 0) normal (0 1 0) ; ;
-SCE
+slow_scene "$TMP/slow.sce" 600
 "$MASTER" "$TMP/slow.sce" -o "$TMP/part.ppm" -j 1 --tile 20 2>"$TMP/err" &
 pid=$!
 # wait until the render has started (a temporary file never appears before the end)
