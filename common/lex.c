@@ -151,11 +151,15 @@ int lex_number(const char *w, size_t n, double *v)
 	return NUM_OK;
 }
 
+/* UTF-8 byte-order mark, written at the start of a file by some editors */
+#define LEX_BOM "\xEF\xBB\xBF"
+
 void lex_init(struct lexer *lx, const char *buf, size_t len)
 {
 	lx->buf = buf;
 	lx->len = len;
-	lx->pos = 0;
+	/* a leading byte-order mark is no part of the first word */
+	lx->pos = len >= 3 && memcmp(buf, LEX_BOM, 3) == 0 ? 3 : 0;
 	lx->line = 1;
 	lx->col = 1;
 	lx->errmsg = NULL;

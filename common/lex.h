@@ -104,7 +104,8 @@ struct lexer {
 	const char *errmsg; /* static text, set with a TK_ERROR token */
 };
 
-/* Starts lexing buf[0..len) (need not be NUL-terminated; must outlive lx). */
+/* Starts lexing buf[0..len) (need not be NUL-terminated; must outlive lx).
+ * A UTF-8 byte-order mark at the start is skipped (column 1 follows it). */
 void lex_init(struct lexer *lx, const char *buf, size_t len);
 
 /* Reads the next token into *t. After TK_EOF or TK_ERROR it keeps returning

@@ -168,6 +168,22 @@ static void test_limits_and_errors(void)
 	CHECK(t.kind == TK_WORD && t.len == 5);
 }
 
+/* A UTF-8 byte-order mark (Windows editors write one) is not part of the
+ * first word; elsewhere it is an ordinary part of a word. */
+static void test_bom(void)
+{
+	const char *src = "\xEF\xBB\xBFobject a\xEF\xBB\xBF";
+	struct lexer lx;
+	struct token t;
+	lex_init(&lx, src, strlen(src));
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_WORD && t.kw == KW_OBJECT && t.line == 1 && t.col == 1);
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_WORD && t.len == 4 && t.col == 8);
+	lex_next(&lx, &t);
+	CHECK(t.kind == TK_EOF);
+}
+
 /* lex_read_file: whole files, the limit, directories, and a NUL byte. */
 static void test_read_file(void)
 {
@@ -221,5 +237,6 @@ int main(void)
 	test_keywords();
 	test_limits_and_errors();
 	test_read_file();
+	test_bom();
 	TEST_MAIN_END();
 }
