@@ -524,6 +524,8 @@ int raw_parse(const char *buf, size_t len, struct scene_mesh *mesh, struct scene
 	}
 	if (raw_cells_grow(&w) < 0)
 		return scene_errorf(err, ERRLEVEL_FATAL, "%s: error: out of memory reading the mesh", file);
+	if (len >= 3 && memcmp(p, "\xEF\xBB\xBF", 3) == 0)
+		p += 3; /* a UTF-8 byte-order mark, as the scene lexer skips it */
 
 	while (p < end) {
 		double v[9];
