@@ -272,10 +272,12 @@ static bool is_object_kw(enum keyword kw)
  * The current token does not belong in the block opened by `open` (spelled
  * open_name). Says why as precisely as it can: end of file or a statement
  * keyword (or one of the `closers`, when given) means the block's ';' is
- * missing; `include` is misplaced; anything else is an unknown verb.
+ * missing; `include` is misplaced; anything else is an unknown verb, and
+ * the message ends with what the block takes ("; expected ...") when
+ * `expected` is given.
  */
 static int unknown(struct parser *P, const char *what, const struct token *open, const char *open_name,
-		   bool (*closer)(enum keyword))
+		   bool (*closer)(enum keyword), const char *expected)
 {
 	const struct token *t = &P->tok;
 	if (t->kind == TK_ERROR)
@@ -286,7 +288,11 @@ static int unknown(struct parser *P, const char *what, const struct token *open,
 		return err_at(P, ERRLEVEL_FATAL, t,
 			      "'include' inside a statement ('%s' at line %d): only allowed between statements",
 			      open_name, open->line);
-	return err_near(P, t, "%s", what);
+	if (!expected)
+		return err_near(P, t, "%s", what);
+	char nt[NEAR_BUF];
+	near_text(t, nt, sizeof nt);
+	return err_at(P, ERRLEVEL_FATAL, t, "%s%s; expected %s", what, nt, expected);
 }
 
 /* ---- values ------------------------------------------------------------------ */
@@ -846,6 +852,22 @@ static int parse_material(struct parser *P, const struct token *open, bool need_
 
 static bool closer_in_prim(enum keyword kw) { return is_object_kw(kw); }
 
+/* What a primitive's block takes, for messages. */
+static const char *prim_expected(enum prim_kind k)
+{
+	switch (k) {
+	case PRIM_SPHERE: return "centre, radius, pole, equator, a transform or ';'";
+	case PRIM_PLANE: return "position, normal, x-axis, y-axis, a transform or ';'";
+	case PRIM_DISK: return "position, normal, x-axis, y-axis, radius, a transform or ';'";
+	case PRIM_CYLINDER: return "from, to, radius, capped, a transform or ';'";
+	case PRIM_BOX: return "a, b, a transform or ';'";
+	case PRIM_TRIANGLE: return "a, b, c, normal-a, normal-b, normal-c, a transform or ';'";
+	case PRIM_RAW: return "file, weld, smooth, x-rotation, y-rotation, z-rotation, at, a transform or ';'";
+	case PRIM_POLYGON: return "contour, a transform or ';'";
+	default: return NULL;
+	}
+}
+
 /*
  * csg -> CSG { OPERAND1 OBJECT body | OPERAND2 OBJECT body
  *            | UNION | INTERSECT | SUBTRACT } ';'
@@ -888,8 +910,8 @@ static int parse_csg(struct parser *P, struct primctx *c, const struct token *op
 			next(P);
 			continue;
 		}
-		return unknown(P, "unknown verb in csg (operand1, operand2, union, intersect or subtract)", open,
-			       "csg", closer_in_prim);
+		return unknown(P, "unknown verb in csg", open, "csg", closer_in_prim,
+			       "operand1, operand2, union, intersect, subtract or ';'");
 	}
 	if (g->operand1 == SCENE_NONE || g->operand2 == SCENE_NONE || !have_op)
 		return err_near(P, &P->tok, "a csg needs 'operand1 object ... ;', 'operand2 object ... ;' and "
@@ -944,7 +966,7 @@ static int parse_prim(struct parser *P, struct primctx *c, mat34 *xf, bool *has_
 		if (r == NOT_MINE) {
 			char what[64];
 			snprintf(what, sizeof what, "unknown verb in object (%s)", name);
-			return unknown(P, what, &open, name, closer_in_prim);
+			return unknown(P, what, &open, name, closer_in_prim, prim_expected(c->o.kind));
 		}
 		if (r)
 			return r;
@@ -1026,7 +1048,8 @@ static int parse_reference(struct parser *P, struct primctx *c, mat34 *xf, bool 
 			r = parse_transform(P, xf, has_xf);
 		}
 		if (r == NOT_MINE)
-			return unknown(P, "unknown verb in complex reference", &open, name, closer_in_prim);
+			return unknown(P, "unknown verb in complex reference", &open, name, closer_in_prim,
+				       "a transform, material or ';'");
 		if (r)
 			return r;
 	}
@@ -1056,7 +1079,9 @@ static int parse_object_body(struct parser *P, const struct token *open, uint32_
 		if (t->kind == TK_SEMI)
 			break;
 		if (t->kind != TK_WORD) {
-			rc = unknown(P, "unknown verb in object", open, "object", NULL);
+			rc = unknown(P, "unknown verb in object", open, "object", NULL,
+				     have_prim ? "a transform, material or ';'"
+					       : "a primitive, a defined object's name, a transform, material or ';'");
 			goto fail;
 		}
 		if (t->kw == KW_PRIMITIVE) {
@@ -1100,7 +1125,9 @@ static int parse_object_body(struct parser *P, const struct token *open, uint32_
 		}
 		rc = parse_transform(P, &xf, &has_xf);
 		if (rc == NOT_MINE) {
-			rc = unknown(P, "unknown verb in object", open, "object", NULL);
+			rc = unknown(P, "unknown verb in object", open, "object", NULL,
+				     have_prim ? "a transform, material or ';'"
+					       : "a primitive, a defined object's name, a transform, material or ';'");
 			goto fail;
 		}
 		if (rc)
@@ -1188,6 +1215,27 @@ static int parse_fades_list(struct parser *P, const struct token *kw, struct sce
 		return err_at(P, ERRLEVEL_FATAL, kw, "a fades list needs a positive distance before its closing 0");
 	return 0;
 }
+
+/* What a shader's block takes, for messages. */
+static const char *shader_expected(enum shader_kind k)
+{
+	switch (k) {
+	case SHADER_BRICKS: return "mortar, brick, size or ';'";
+	case SHADER_TILES: return "face, grout, tile-width, grout-width, size or ';'";
+	case SHADER_CHEQUERS: return "material-a, material-b, size or ';'";
+	case SHADER_BUMPY: return "size, terms, xsize, ysize, zsize, material, saturation, depth or ';'";
+	case SHADER_NOISE: return "size, material, variance, colour or ';'";
+	case SHADER_FADES: return "axis, colours, materials or ';'";
+	case SHADER_TURB3D: return "terms, depth, size, material or ';'";
+	default: return NULL;
+	}
+}
+
+/* What a material block takes, for messages. */
+#define MATERIAL_EXPECTED                                                                          \
+	"called, named, colour, diff-colour, spec-colour, tran-colour, diffuse-reflection, "       \
+	"specular-reflection, specular-power, reflection, transparency, refractive-index, a shader " \
+	"(bricks, tiles, chequers, bumpy, noise, fades, turb3d) or ';'"
 
 static bool closer_in_shader(enum keyword kw)
 {
@@ -1287,7 +1335,7 @@ static int parse_shader(struct parser *P, struct scene_shader *sh)
 		if (r == NOT_MINE) {
 			char what[64];
 			snprintf(what, sizeof what, "unknown verb in material (%s shader)", name);
-			return unknown(P, what, &open, name, closer_in_shader);
+			return unknown(P, what, &open, name, closer_in_shader, shader_expected(k));
 		}
 		if (r)
 			return r;
@@ -1331,7 +1379,8 @@ static int parse_material(struct parser *P, const struct token *open, bool need_
 		if (kw.kind == TK_SEMI)
 			break;
 		if (kw.kind != TK_WORD) {
-			rc = unknown(P, "unknown verb in material", open, "material", closer_in_material);
+			rc = unknown(P, "unknown verb in material", open, "material", closer_in_material,
+				     MATERIAL_EXPECTED);
 			goto fail;
 		}
 		if (kw.kw == KW_CALLED) {
@@ -1402,7 +1451,8 @@ static int parse_material(struct parser *P, const struct token *open, bool need_
 			rc = parse_shader(P, &m.shader);
 			break;
 		default:
-			rc = unknown(P, "unknown verb in material", open, "material", closer_in_material);
+			rc = unknown(P, "unknown verb in material", open, "material", closer_in_material,
+				     MATERIAL_EXPECTED);
 			break;
 		}
 		if (rc)
@@ -1512,7 +1562,11 @@ static int parse_filter(struct parser *P, struct scene_camera *cam, bool *cache_
 		if (r == NOT_MINE) {
 			char what[80];
 			snprintf(what, sizeof what, "unrecognised keyword in camera section (filter %s)", fname);
-			return unknown(P, what, &open, "filter", closer_in_filter);
+			return unknown(P, what, &open, "filter", closer_in_filter,
+				       k == FILTER_ADAPTIVE      ? "threshold, max-depth, cache-size, relax or ';'"
+				       : k == FILTER_SUPERSAMPLE ? "x-samples, y-samples or ';'"
+				       : k == FILTER_DISK        ? "radius, samples or ';'"
+								 : "radius, samples, focal-length or ';'");
 		}
 		if (r)
 			return r;
@@ -1589,7 +1643,8 @@ static int parse_camera(struct parser *P)
 					     "xsize/ysize belong in the image statement)");
 			break;
 		default:
-			r = unknown(P, "unrecognised keyword in camera section", &open, "camera", NULL);
+			r = unknown(P, "unrecognised keyword in camera section", &open, "camera", NULL,
+				    "look-at, look-from, drop-line, depth, x-size, y-size, filter or ';'");
 			break;
 		}
 		if (r)
@@ -1638,7 +1693,8 @@ static int parse_image(struct parser *P)
 					     "x-size/y-size belong in the camera statement)");
 			break;
 		default:
-			r = unknown(P, "unrecognised keyword in image section", &open, "image", NULL);
+			r = unknown(P, "unrecognised keyword in image section", &open, "image", NULL,
+				    "xsize, ysize, no-shadows, no-reflections, nonstop, intersect-buffer or ';'");
 			break;
 		}
 		if (r)
@@ -1715,7 +1771,10 @@ static int parse_light(struct parser *P)
 				if (v == NOT_MINE) {
 					char what[64];
 					snprintf(what, sizeof what, "unknown verb in light (shape %s)", sname);
-					return unknown(P, what, &st, sname, closer_in_light);
+					return unknown(P, what, &st, sname, closer_in_light,
+						       l.shape == LIGHT_SPHERE	   ? "centre, radius, pole, equator or ';'"
+						       : l.shape == LIGHT_CYLINDER ? "from, to, radius, capped or ';'"
+										   : "a, b or ';'");
 				}
 				if (v)
 					return v;
@@ -1726,7 +1785,8 @@ static int parse_light(struct parser *P)
 			break;
 		}
 		default:
-			r = unknown(P, "unknown verb in light", &open, "light", NULL);
+			r = unknown(P, "unknown verb in light", &open, "light", NULL,
+				    "colour, position, shape, samples, fall-off, no-shadows or ';'");
 			break;
 		}
 		if (r)
@@ -1795,7 +1855,7 @@ static int parse_define_object(struct parser *P, const struct token *open)
 				depth = P->obj_depth[id];
 			continue;
 		}
-		rc = unknown(P, "unknown verb in definition (name or object expected)", open, "object", NULL);
+		rc = unknown(P, "unknown verb in definition (name or object expected)", open, "object", NULL, NULL);
 		goto fail;
 	}
 	if (!d.name) {
@@ -1845,7 +1905,7 @@ static int parse_define(struct parser *P)
 			TRY(parse_material(P, &kw, true, &id));
 		} else {
 			return unknown(P, "unknown verb in definition (object or material expected)", &open, "define",
-				       NULL);
+				       NULL, NULL);
 		}
 	}
 	next(P);
@@ -1958,8 +2018,10 @@ static int parse_chunk(struct parser *P)
 		}
 		default:
 			if (P->camera_only)
-				return err_near(P, t, "unrecognised keyword in camera file");
-			return err_near(P, t, "unknown verb in scene file");
+				return unknown(P, "unrecognised keyword in camera file", t, "camera file", NULL,
+					       "camera, image, light or include");
+			return unknown(P, "unknown verb in scene file", t, "scene file", NULL,
+				       "camera, image, light, object, define, material or include");
 		}
 	}
 }

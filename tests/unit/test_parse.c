@@ -145,6 +145,12 @@ static void test_filters(void)
 static void test_camera_errors(void)
 {
 	CHECK(fails("camera\n  zoom 3 ;", 1, "t.sce:2:3: error: unrecognised keyword in camera section near 'zoom'"));
+	/* an unknown word is followed by what the block takes */
+	CHECK(fails("camera zoom 3 ;", 1,
+		    "near 'zoom'; expected look-at, look-from, drop-line, depth, x-size, y-size, filter or ';'"));
+	CHECK(fails("light shape box radius 1 ; ;", 1, "(shape box) near 'radius'; expected a, b or ';'"));
+	CHECK(fails("object sphere ; material noise grout 1 ; ; ;", 1,
+		    "(noise shader) near 'grout'; expected size, material, variance, colour or ';'"));
 	CHECK(fails("camera xsize 3 ;", 1, "unrecognised keyword in camera section"));
 	CHECK(fails("image\n x-size 3 ;", 1, "t.sce:2:2: error: unrecognised keyword in image section"));
 	CHECK(fails("image bogus ;", 1, "unrecognised keyword in image section near 'bogus'"));
