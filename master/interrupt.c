@@ -19,10 +19,13 @@
 #define ESC_SEQ_MS 30
 
 static atomic_int *g_cancel;
-static volatile sig_atomic_t g_reason;
-static volatile sig_atomic_t g_sigints;
-static volatile sig_atomic_t g_raw;       /* terminal is in our mode */
-static volatile sig_atomic_t g_want_raw;  /* key watching is on */
+/* Shared by the main thread, the key thread and signal handlers that may run
+ * on any thread: lock-free atomics (safe in handlers, C11 7.14.1.1), not
+ * volatile sig_atomic_t, which only orders a handler against its own thread. */
+static atomic_int g_reason;
+static atomic_int g_sigints;
+static atomic_int g_raw;       /* terminal is in our mode */
+static atomic_int g_want_raw;  /* key watching is on */
 static struct termios g_saved;            /* terminal settings to restore */
 static atomic_int g_stop;
 static pthread_t g_thread;
@@ -62,7 +65,7 @@ static void at_exit_restore(void) { term_restore(); }
 
 static void on_sigint(int sig)
 {
-	if (g_sigints++ > 0) { /* a second Ctrl-C: die the usual way */
+	if (atomic_fetch_add(&g_sigints, 1) > 0) { /* a second Ctrl-C: die the usual way */
 		term_restore();
 		signal(sig, SIG_DFL);
 		raise(sig);
@@ -161,8 +164,8 @@ static void *key_thread(void *arg)
 			}
 		}
 		if (stop) {
-			if (g_reason == INTERRUPT_NONE)
-				g_reason = INTERRUPT_KEY;
+			int none = INTERRUPT_NONE;
+			atomic_compare_exchange_strong(&g_reason, &none, INTERRUPT_KEY);
 			atomic_store(g_cancel, 1);
 			break;
 		}
