@@ -814,20 +814,12 @@ static int raw_finish(struct parser *P, struct primctx *c, const struct token *a
 		m->file = NULL;
 		return P->err->level ? P->err->level : ERRLEVEL_FATAL;
 	}
-	char *keep = strdup(path);
 	uint32_t id;
-	if (!keep) {
-		free(m->file);
-		free(m->vertices);
-		free(m->normals);
-		free(m->tris);
-		memset(m, 0, sizeof *m);
-		return err_at(P, ERRLEVEL_FATAL, &c->file_tok, "out of memory");
-	}
-	if (scene_add_mesh(P->s, m, &id, P->err)) {
-		free(keep);
+	if (scene_add_mesh(P->s, m, &id, P->err)) /* the scene owns m's arrays either way */
 		return P->err->level;
-	}
+	char *keep = strdup(path); /* path itself is the mesh's file name now */
+	if (!keep)
+		return err_at(P, ERRLEVEL_FATAL, &c->file_tok, "out of memory");
 	if (P->s->n_meshes > P->cap_mesh_path) {
 		uint32_t nc = P->cap_mesh_path ? P->cap_mesh_path * 2 : 16;
 		char **np = realloc(P->mesh_path, nc * sizeof *np);
