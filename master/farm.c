@@ -445,7 +445,7 @@ static void worker_refuse(struct farm *f, struct worker *w, int code, const char
 	worker_lost(f, w, true, "%s (%s error)", text, proto_err_name(code));
 }
 
-static void send_hello(struct farm *f, struct worker *w)
+static int send_hello(struct farm *f, struct worker *w)
 {
 	struct proto_hello h;
 	memset(&h, 0, sizeof h);
@@ -454,10 +454,9 @@ static void send_hello(struct farm *f, struct worker *w)
 	h.secret = f->secret != NULL;
 	uint32_t ms = (uint32_t)(f->hb_interval * 1000);
 	h.heartbeat_ms = ms ? ms : 1;
-	proto_random(w->nonce, sizeof w->nonce);
 	memcpy(h.nonce, w->nonce, sizeof h.nonce);
 	snprintf(h.build, sizeof h.build, "%s", proto_build_id());
-	proto_send_hello(w->pc, &h);
+	return proto_send_hello(w->pc, &h);
 }
 
 /* Tops up w's tiles in flight. */
@@ -619,6 +618,7 @@ static void on_message(struct farm *f, struct worker *w, const struct proto_msg 
 		} else {
 			proto_send_offer(w->pc, f->hash, f->scene_len, f->s.w, f->s.h);
 			w->state = W_OFFER;
+			proto_conn_set_limit(w->pc, LIM_FRAME_PAYLOAD); /* tile results from now on */
 		}
 		return;
 	}
@@ -633,6 +633,7 @@ static void on_message(struct farm *f, struct worker *w, const struct proto_msg 
 		}
 		proto_send_offer(w->pc, f->hash, f->scene_len, f->s.w, f->s.h);
 		w->state = W_OFFER;
+		proto_conn_set_limit(w->pc, LIM_FRAME_PAYLOAD); /* tile results from now on */
 		return;
 	}
 	case W_OFFER:
@@ -861,9 +862,20 @@ static int farm_loop(struct farm *f, atomic_int *cancel, int wake_rd)
 					continue;
 				}
 				w->state = W_HELLO;
+				/* an unauthenticated peer gets no big buffers from us */
+				proto_conn_set_limit(w->pc, LIM_HANDSHAKE_PAYLOAD);
 				w->last_rx = w->connected_at = net_now();
 				w->last_hb = 0;
-				send_hello(f, w);
+				/* a fresh nonce per connection, or no handshake: a
+				 * predictable one would let a recorded proof be replayed */
+				if (proto_random(w->nonce, sizeof w->nonce) < 0) {
+					worker_lost(f, w, true, "no random source for the handshake nonce");
+					continue;
+				}
+				if (send_hello(f, w) < 0) {
+					worker_lost(f, w, false, "out of memory");
+					continue;
+				}
 				proto_conn_flush(w->pc);
 				continue;
 			}

@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,19 +17,25 @@
 
 /* ---- small pure helpers ---- */
 
+static uint32_t crc_table[256];
+static pthread_once_t crc_once = PTHREAD_ONCE_INIT;
+
+static void crc_init(void)
+{
+	for (uint32_t i = 0; i < 256; i++) {
+		uint32_t c = i;
+		for (int k = 0; k < 8; k++)
+			c = c & 1 ? 0xedb88320u ^ (c >> 1) : c >> 1;
+		crc_table[i] = c;
+	}
+}
+
 uint32_t proto_crc32(uint32_t crc, const uint8_t *p, size_t n)
 {
-	static uint32_t table[256];
-	static _Atomic int ready;
-	if (!ready) { /* idempotent: every thread computes the same table */
-		for (uint32_t i = 0; i < 256; i++) {
-			uint32_t c = i;
-			for (int k = 0; k < 8; k++)
-				c = c & 1 ? 0xedb88320u ^ (c >> 1) : c >> 1;
-			table[i] = c;
-		}
-		ready = 1;
-	}
+	/* once: tracer threads call this concurrently (two threads filling the
+	 * table at once was a data race, even if they wrote the same values) */
+	pthread_once(&crc_once, crc_init);
+	const uint32_t *table = crc_table;
 	crc = ~crc;
 	for (size_t i = 0; i < n; i++)
 		crc = table[(crc ^ p[i]) & 0xff] ^ (crc >> 8);
@@ -299,11 +306,12 @@ struct proto_conn {
 	struct proto_wbuf out;
 	size_t out_pos;     /* bytes of out already written */
 	uint64_t bytes_out, bytes_in;
+	uint32_t max_payload; /* longest frame payload accepted now */
 };
 
-/* the input buffer starts small and may grow to one whole frame */
+/* the input buffer starts small (or at one allowed frame, if less) and may
+ * grow to one whole frame of the connection's limit */
 #define IN_START (64u * 1024)
-#define IN_MAX (PROTO_HEADER_BYTES + LIM_FRAME_PAYLOAD)
 
 struct proto_conn *proto_conn_new(int fd)
 {
@@ -312,6 +320,7 @@ struct proto_conn *proto_conn_new(int fd)
 		return NULL;
 	c->fd = fd;
 	c->version = PROTO_VERSION;
+	c->max_payload = LIM_FRAME_PAYLOAD;
 	return c;
 }
 
@@ -328,6 +337,10 @@ void proto_conn_free(struct proto_conn *c)
 
 int proto_conn_fd(const struct proto_conn *c) { return c->fd; }
 void proto_conn_set_version(struct proto_conn *c, uint16_t version) { c->version = version; }
+void proto_conn_set_limit(struct proto_conn *c, uint32_t max_payload)
+{
+	c->max_payload = max_payload < LIM_FRAME_PAYLOAD ? max_payload : LIM_FRAME_PAYLOAD;
+}
 size_t proto_conn_pending(const struct proto_conn *c) { return c->in_len - c->in_pos; }
 size_t proto_conn_outq(const struct proto_conn *c) { return c->out.len - c->out_pos; }
 uint64_t proto_conn_bytes_out(const struct proto_conn *c) { return c->bytes_out; }
@@ -344,10 +357,11 @@ int proto_conn_read(struct proto_conn *c, const char **why)
 	if (c->in_len == c->in_cap) {
 		/* grow only when full, by doubling, never past one frame: what the
 		 * peer declared is never allocated before it has been sent */
+		size_t max = PROTO_HEADER_BYTES + (size_t)c->max_payload;
 		size_t nc = c->in_cap ? c->in_cap * 2 : IN_START;
-		if (nc > IN_MAX)
-			nc = IN_MAX;
-		if (nc == c->in_cap)
+		if (nc > max)
+			nc = max;
+		if (nc <= c->in_cap)
 			return 0; /* a whole frame is buffered: proto_conn_next will take it */
 		uint8_t *p = realloc(c->in, nc);
 		if (!p) {
@@ -387,6 +401,11 @@ int proto_conn_next(struct proto_conn *c, struct proto_msg *m, int *code, const 
 	uint32_t plen;
 	if (proto_header_parse(h, avail, &type, &version, &plen, code, why) < 0)
 		return -1;
+	if (plen > c->max_payload) {
+		*code = PERR_LIMIT;
+		*why = "frame longer than allowed at this point of the protocol";
+		return -1;
+	}
 	if (avail < PROTO_HEADER_BYTES + (size_t)plen)
 		return 0;
 	if (version != PROTO_VERSION && type != MSG_HELLO && type != MSG_ERROR) {

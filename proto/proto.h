@@ -44,6 +44,11 @@
 #define LIM_TILES_QUEUED 1024
 /* a shared secret file */
 #define LIM_SECRET_BYTES 4096
+/* a frame before the handshake is done: HELLO (112 B), AUTH (32 B) and ERROR
+ * (262 B) fit; an unauthenticated peer never makes us buffer more than this */
+#define LIM_HANDSHAKE_PAYLOAD 1024u
+/* the longest frame a master sends: a full SCENE_DATA (u64 offset + chunk) */
+#define PROTO_MASTER_FRAME_MAX (8u + PROTO_CHUNK_BYTES)
 /* bytes a connection may have waiting to be sent before the sender pauses */
 #define PROTO_OUT_HIGH_WATER (4u * 1024 * 1024)
 
@@ -205,6 +210,12 @@ int proto_send_heartbeat(struct proto_conn *c, uint32_t done, uint32_t queued);
 int proto_send_cancel(struct proto_conn *c, uint32_t id);
 int proto_send_error(struct proto_conn *c, int code, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 int proto_send_bye(struct proto_conn *c);
+/*
+ * Largest payload accepted from now on (at most LIM_FRAME_PAYLOAD; the
+ * default). A longer declared frame is an ERROR(limit) before any of its
+ * bytes are buffered, and the input buffer never grows past header + limit.
+ */
+void proto_conn_set_limit(struct proto_conn *c, uint32_t max_payload);
 /* Test hook: the version written into frame headers by this connection. */
 void proto_conn_set_version(struct proto_conn *c, uint16_t version);
 

@@ -547,6 +547,16 @@ static void on_offer(struct wk_conn *c, const struct proto_msg *m)
 			  (unsigned long long)c->scene_size);
 		return;
 	}
+	/* scenes being received count against the same budget: many peers
+	 * offering big scenes at once cannot make the worker hold more */
+	uint64_t receiving = 0;
+	for (size_t i = 0; i < n_conns; i++)
+		if (conns[i]->state == ST_RECV)
+			receiving += conns[i]->scene_size;
+	if (receiving + c->scene_size > opt.cache_bytes) {
+		conn_fail(c, PERR_LIMIT, "scenes being received would exceed this worker's --cache-mb: try again later");
+		return;
+	}
 	bool exact;
 	pthread_mutex_lock(&pool.mu);
 	struct wk_entry *e = cache_find(c->hash, c->w, c->h, &exact);
@@ -742,7 +752,12 @@ static void on_message(struct wk_conn *c, const struct proto_msg *m)
 		memcpy(c->peer_nonce, h->nonce, PROTO_NONCE_BYTES);
 		double hb = h->heartbeat_ms / 1000.0;
 		c->hb_interval = hb < 0.05 ? 0.05 : hb > 10 ? 10 : hb;
-		c->state = opt.secret ? ST_AUTH : ST_OFFER;
+		if (opt.secret) {
+			c->state = ST_AUTH;
+		} else {
+			c->state = ST_OFFER;
+			proto_conn_set_limit(c->pc, PROTO_MASTER_FRAME_MAX);
+		}
 		return;
 	}
 	case ST_AUTH: {
@@ -757,6 +772,8 @@ static void on_message(struct wk_conn *c, const struct proto_msg *m)
 		proto_auth_mac(opt.secret, opt.secret_len, ROLE_WORKER, c->peer_nonce, c->nonce, want);
 		proto_send_auth(c->pc, want);
 		c->state = ST_OFFER;
+		/* authenticated: scene chunks may come now (nothing longer ever does) */
+		proto_conn_set_limit(c->pc, PROTO_MASTER_FRAME_MAX);
 		return;
 	}
 	case ST_OFFER:
@@ -890,6 +907,8 @@ static void accept_all(int lfd)
 			continue;
 		}
 		c->pc = pc;
+		/* until the handshake is done, no frame longer than a HELLO */
+		proto_conn_set_limit(pc, LIM_HANDSHAKE_PAYLOAD);
 		snprintf(c->peer, sizeof c->peer, "%s", peer);
 		c->state = ST_HELLO;
 		c->last_rx = c->started = net_now();

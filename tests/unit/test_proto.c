@@ -5,6 +5,7 @@
  * hash; address parsing and secret files.
  */
 #include <fcntl.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -214,6 +215,63 @@ static void test_bad_frames(void)
 	unpair();
 }
 
+/* A connection's own frame limit (the handshake's): a longer declared frame
+ * is refused from its header alone, and the buffer stays at header + limit. */
+static void test_conn_limit(void)
+{
+	uint8_t f[12];
+	struct proto_msg m;
+	int code = 0;
+	const char *why = "", *w;
+	pair();
+	proto_conn_set_limit(B, LIM_HANDSHAKE_PAYLOAD);
+	put_header(f, PROTO_MAGIC, 1, MSG_HELLO, LIM_HANDSHAKE_PAYLOAD + 1);
+	CHECK(write(sv[0], f, 12) == 12);
+	CHECK(proto_conn_read(B, &w) == 1);
+	CHECK(proto_conn_next(B, &m, &code, &why) == -1 && code == PERR_LIMIT);
+	unpair();
+	/* at the limit: waits for the bytes, reading never buffers past one frame */
+	pair();
+	proto_conn_set_limit(B, LIM_HANDSHAKE_PAYLOAD);
+	uint8_t big[4096] = { 0 };
+	size_t one = PROTO_HEADER_BYTES + LIM_HANDSHAKE_PAYLOAD;
+	put_header(big, PROTO_MAGIC, 1, MSG_SCENE_DATA, LIM_HANDSHAKE_PAYLOAD);
+	put_header(big + one, PROTO_MAGIC, 1, MSG_BYE, 0); /* and a second frame behind it */
+	CHECK(write(sv[0], big, one + 12) == (ssize_t)(one + 12));
+	while (proto_conn_read(B, &w) > 0)
+		;
+	CHECK(proto_conn_pending(B) == one);
+	CHECK(proto_conn_next(B, &m, &code, &why) == 1 && m.type == MSG_SCENE_DATA);
+	CHECK(proto_conn_read(B, &w) == 1);
+	CHECK(proto_conn_next(B, &m, &code, &why) == 1 && m.type == MSG_BYE);
+	/* raised again (authenticated): longer frames pass */
+	proto_conn_set_limit(B, LIM_FRAME_PAYLOAD);
+	proto_send_data(A, 0, big, sizeof big);
+	CHECK(xfer(&m, &code, &why) == 1 && m.type == MSG_SCENE_DATA && m.u.data.n == sizeof big);
+	unpair();
+}
+
+/* Several threads computing CRCs at once (run under SAN=thread: the lazily
+ * filled table was a data race). */
+static void *crc_thread(void *arg)
+{
+	uint32_t *out = arg;
+	*out = proto_crc32(0, (const uint8_t *)"123456789", 9);
+	return NULL;
+}
+
+static void test_crc_threads(void)
+{
+	pthread_t t[4];
+	uint32_t v[4] = { 0 };
+	for (int i = 0; i < 4; i++)
+		CHECK(pthread_create(&t[i], NULL, crc_thread, &v[i]) == 0);
+	for (int i = 0; i < 4; i++) {
+		pthread_join(t[i], NULL);
+		CHECK(v[i] == 0xcbf43926u);
+	}
+}
+
 static void test_crypto_glue(void)
 {
 	CHECK(proto_crc32(0, (const uint8_t *)"123456789", 9) == 0xcbf43926u);
@@ -290,6 +348,8 @@ static void test_net_and_secret(void)
 
 int main(void)
 {
+	test_crc_threads(); /* first: nothing else has filled the CRC table yet */
+	test_conn_limit();
 	test_round_trips();
 	test_short_reads();
 	test_bad_frames();

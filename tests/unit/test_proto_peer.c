@@ -5,6 +5,7 @@
  * worker goes on serving; then a whole job over the raw protocol returns the
  * same pixels as the local renderer; SIGTERM ends the worker with status 0.
  */
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
@@ -102,6 +103,22 @@ static struct proto_conn *hello(uint8_t role, uint32_t version)
 	return c;
 }
 
+/* Open file descriptors of process pid (Linux /proc), or -1. */
+static int count_fds(pid_t pid)
+{
+	char path[64];
+	snprintf(path, sizeof path, "/proc/%d/fd", (int)pid);
+	DIR *d = opendir(path);
+	if (!d)
+		return -1;
+	int n = 0;
+	struct dirent *e;
+	while ((e = readdir(d)))
+		n += e->d_name[0] != '.';
+	closedir(d);
+	return n;
+}
+
 int main(void)
 {
 	signal(SIGPIPE, SIG_IGN);
@@ -152,6 +169,16 @@ int main(void)
 	CHECK(expect_error(c, PERR_LIMIT, NULL));
 	proto_conn_free(c);
 
+	/* before the handshake no frame longer than a HELLO is buffered: a
+	 * declared 64 KiB "HELLO" is refused at once, not waited for */
+	int fds0 = count_fds(pid);
+	c = dial();
+	proto_wr32(hdr + 8, 64u * 1024);
+	CHECK(send(proto_conn_fd(c), hdr, 12, 0) == 12);
+	CHECK(next_real(c, &m) && m.type == MSG_HELLO);
+	CHECK(expect_error(c, PERR_LIMIT, "allowed"));
+	proto_conn_free(c);
+
 	/* a master that is not one, another version, a message out of turn */
 	c = hello(ROLE_WORKER, PROTO_VERSION);
 	CHECK(c && expect_error(c, PERR_PROTOCOL, "not a master"));
@@ -172,6 +199,19 @@ int main(void)
 	proto_send_offer(c, hash, 2u << 20, 64, 48);
 	CHECK(c && expect_error(c, PERR_LIMIT, "--cache-mb"));
 	proto_conn_free(c);
+
+	/* scenes being received share the cache budget: two peers offering
+	 * 600 KB each to a 1 MiB worker cannot both send */
+	uint8_t hash2[32] = { 2 };
+	struct proto_conn *c1 = hello(ROLE_MASTER, PROTO_VERSION);
+	CHECK(c1 != NULL);
+	proto_send_offer(c1, hash, 600000, 64, 48);
+	CHECK(c1 && next_real(c1, &m) && m.type == MSG_SCENE_NEED);
+	c = hello(ROLE_MASTER, PROTO_VERSION);
+	proto_send_offer(c, hash2, 600000, 64, 48);
+	CHECK(c && expect_error(c, PERR_LIMIT, "being received"));
+	proto_conn_free(c);
+	proto_conn_free(c1);
 
 	/* scene bytes that do not match their hash; chunks out of order */
 	struct scene *s = fx_scene();
@@ -233,6 +273,15 @@ int main(void)
 	proto_conn_flush(c);
 	CHECK(!next_real(c, &m)); /* BYE: the worker closes */
 	proto_conn_free(c);
+
+	/* every connection above is closed: the worker holds no more fds than
+	 * before them (it closes a connection once its ERROR is flushed) */
+	int fds1 = -1;
+	for (int i = 0; i < 100 && (fds1 = count_fds(pid)) != fds0; i++)
+		usleep(50000);
+	CHECK(fds0 > 0 && fds1 == fds0);
+	if (fds1 != fds0)
+		fprintf(stderr, "worker fds: %d before, %d after\n", fds0, fds1);
 
 	renderer_free(r);
 	free(enc);
