@@ -950,11 +950,13 @@ int farm_render(const struct master_opts *o, const struct scene *sc, struct rend
 	if (parse_workers(&f) < 0)
 		goto out;
 	if (o->secret_file) {
-		char err[512];
-		if (proto_read_secret(o->secret_file, &f.secret, &f.secret_len, err, sizeof err) < 0) {
+		char err[512], warn[512];
+		if (proto_read_secret(o->secret_file, &f.secret, &f.secret_len, err, sizeof err, warn, sizeof warn) < 0) {
 			fprintf(stderr, "portray-master: --secret-file: %s\n", err);
 			goto out;
 		}
+		if (warn[0])
+			fprintf(stderr, "portray-master: warning: --secret-file %s\n", warn);
 	}
 	rc = ERRLEVEL_FATAL;
 	if (proto_scene_encode(sc, &f.scene, &f.scene_len) < 0) {

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "proto/serial.h"
@@ -581,13 +582,32 @@ int proto_send_bye(struct proto_conn *c)
 	return frame_end(c, at);
 }
 
-int proto_read_secret(const char *path, uint8_t **out, size_t *len, char *err, size_t errlen)
+int proto_read_secret(const char *path, uint8_t **out, size_t *len, char *err, size_t errlen, char *warn,
+		      size_t warnlen)
 {
 	*out = NULL;
 	*len = 0;
-	FILE *f = fopen(path, "rb");
+	if (warnlen)
+		warn[0] = 0;
+	/* O_NONBLOCK: a FIFO named by mistake must not hang the open */
+	int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
+	if (fd < 0) {
+		snprintf(err, errlen, "%s: %s", path, strerror(errno));
+		return -1;
+	}
+	struct stat st;
+	if (fstat(fd, &st) < 0 || !S_ISREG(st.st_mode)) {
+		snprintf(err, errlen, "%s: not a regular file", path);
+		close(fd);
+		return -1;
+	}
+	if (st.st_mode & (S_IRWXG | S_IRWXO))
+		snprintf(warn, warnlen, "%s: readable by other users (mode %03o): chmod 600 it", path,
+			 (unsigned)(st.st_mode & 0777));
+	FILE *f = fdopen(fd, "rb");
 	if (!f) {
 		snprintf(err, errlen, "%s: %s", path, strerror(errno));
+		close(fd);
 		return -1;
 	}
 	uint8_t *buf = malloc(LIM_SECRET_BYTES + 1);

@@ -232,10 +232,12 @@ void proto_scene_hash(const uint8_t *p, size_t n, uint8_t out[PROTO_HASH_BYTES])
 /* Constant-time equality of n bytes. */
 bool proto_mac_equal(const uint8_t *a, const uint8_t *b, size_t n);
 /*
- * Reads a shared secret file (at most LIM_SECRET_BYTES, trailing newlines
- * dropped, not empty). Returns 0 with *out (caller frees) and *len, or -1
- * with a message in err.
+ * Reads a shared secret file (a regular file of at most LIM_SECRET_BYTES,
+ * trailing newlines dropped, not empty). Returns 0 with *out (caller frees)
+ * and *len, or -1 with a message in err. warn gets a warning ("" if none)
+ * when the file is readable by group or others.
  */
-int proto_read_secret(const char *path, uint8_t **out, size_t *len, char *err, size_t errlen);
+int proto_read_secret(const char *path, uint8_t **out, size_t *len, char *err, size_t errlen, char *warn,
+		      size_t warnlen);
 
 #endif

@@ -345,6 +345,7 @@ struct wk_conn {
 	struct wk_entry *entry; /* the entry this job uses (also in job) */
 	bool cache_hit;
 	uint32_t tiles_done;
+	bool got_tile;         /* the first TILE arrived (logged: tests wait for it) */
 	bool logged;
 };
 
@@ -650,6 +651,12 @@ static void on_tile(struct wk_conn *c, const struct proto_msg *m)
 		conn_fail(c, PERR_PROTOCOL, "tile %u (%u,%u %ux%u) is outside the %ux%u image", t->id, t->x, t->y,
 			  t->w, t->h, c->w, c->h);
 		return;
+	}
+	if (!c->got_tile) {
+		char hx[17];
+		hex8(c->hash, hx);
+		wk_log("job %s scene %s %ux%u: started", c->peer, hx, c->w, c->h);
+		c->got_tile = true;
 	}
 	if (opt.fault == FAULT_BLACK) { /* simulated worker: instant black tiles */
 		size_t n = (size_t)t->w * t->h * 3;
@@ -996,7 +1003,8 @@ static void usage(FILE *f)
 		"  -h, --help              show this help\n"
 		"  -V, --version           show the version\n"
 		"\n"
-		"Logs one line per job on stderr. SIGTERM or SIGINT ends it cleanly.\n",
+		"Logs a line when a job starts and one when it ends, on stderr.\n"
+		"SIGTERM or SIGINT ends it cleanly.\n",
 		PROTO_DEFAULT_PORT, WK_CACHE_MB_DEFAULT);
 }
 
@@ -1088,11 +1096,14 @@ int main(int argc, char **argv)
 	if (opt.threads == 0)
 		opt.threads = render_ncpus();
 	opt.cache_bytes = (uint64_t)cache_mb << 20;
-	char err[512];
-	if (secret_file && proto_read_secret(secret_file, &opt.secret, &opt.secret_len, err, sizeof err) < 0) {
+	char err[512], warn[512];
+	if (secret_file &&
+	    proto_read_secret(secret_file, &opt.secret, &opt.secret_len, err, sizeof err, warn, sizeof warn) < 0) {
 		fprintf(stderr, "portray-worker: %s\n", err);
 		return 64;
 	}
+	if (secret_file && warn[0])
+		fprintf(stderr, "portray-worker: warning: --secret-file %s\n", warn);
 	char host[NET_HOST_LEN], port[NET_PORT_LEN];
 	if (net_parse_hostport(listen_at, host, port, err, sizeof err) < 0) {
 		fprintf(stderr, "portray-worker: --listen: %s\n", err);

@@ -17,10 +17,5 @@ grep -q "worker 127.0.0.1:$badsize_PORT dropped: tile [0-9]* came back as 15x16"
 grep -q " [1-9][0-9]* re-dispatched, .* 2 invalid results" "$T/m.log" || fail "summary does not show the re-dispatch"
 grep -q "^portray-master:   127.0.0.1:$badsum_PORT  *0 tiles" "$T/m.log" || fail "a bad tile was counted"
 # the workers were told why
-i=0
-until grep -q "peer says: tile [0-9]* failed its checksum" "$T/badsum.log"; do
-	i=$((i + 1))
-	[ $i -gt 40 ] && fail "the faulty worker was not told"
-	sleep 0.05
-done
+wait_for "$T/badsum.log" "peer says: tile [0-9]* failed its checksum" "the faulty worker to be told"
 echo ok

@@ -10,7 +10,9 @@ local_render "$SCENE" "$T/local.ppm" --size 192x144
 	-w "127.0.0.1:$a_PORT,127.0.0.1:$b_PORT" 2>"$T/m.log" &
 M=$!
 PIDS="$PIDS $M"
-sleep 0.7
+# a condition, not a fixed sleep: once a has its first tile it keeps tiles in
+# flight until the queue runs dry (192 tiles of >= 25 ms on two -j 1 workers)
+wait_for "$T/a.log" " job .*: started" "worker a to start its job"
 kill -0 $M 2>/dev/null || fail "render ended before the kill: test too fast"
 kill -KILL "$a_PID"
 wait $M || fail "master failed after a worker was killed (exit $?)"

@@ -5,6 +5,8 @@
 . "$(dirname "$0")/farm_lib.inc"
 printf 'correct horse battery staple\n' >"$T/secret"
 printf 'something else\n' >"$T/wrong"
+chmod 600 "$T/secret"
+chmod 644 "$T/wrong"
 start_worker s -j 1 --secret-file "$T/secret"
 start_worker v -j 1 --test-fault proto-version
 local_render "$SCENE" "$T/local.ppm"
@@ -20,33 +22,29 @@ rc=$?
 [ $rc -eq 69 ] || fail "wrong secret: exit $rc, expected 69"
 grep -q "authentication failed" "$T/m1.log" || fail "wrong secret: master message unclear"
 grep -q "every worker is lost and --no-local" "$T/m1.log" || fail "no final message"
-grep -q "refused: authentication failed: the master's secret differs" "$T/s.log" || fail "wrong secret: worker message unclear"
+wait_for "$T/s.log" "refused: authentication failed: the master's secret differs" "the worker's wrong-secret message"
+grep -q "warning: --secret-file .*readable by other users" "$T/m1.log" || fail "no warning for a world-readable secret file"
 
 # no secret at all against a worker that wants one
 "$BIN/portray-master" "$SCENE" -o "$T/x.ppm" --no-local -w "127.0.0.1:$s_PORT" 2>"$T/m2.log"
 [ $? -eq 69 ] || fail "missing secret: wrong exit code"
 grep -q "requires a shared secret" "$T/m2.log" || fail "missing secret: master message unclear"
-grep -q "refused: this worker requires a shared secret" "$T/s.log" || fail "missing secret: worker message unclear"
+wait_for "$T/s.log" "refused: this worker requires a shared secret" "the worker's missing-secret message"
 
 # protocol version mismatch
 "$BIN/portray-master" "$SCENE" -o "$T/x.ppm" --no-local -w "127.0.0.1:$v_PORT" 2>"$T/m3.log"
 [ $? -eq 69 ] || fail "version mismatch: wrong exit code"
 grep -q "protocol version mismatch: worker speaks version 2, master speaks 1" "$T/m3.log" ||
 	fail "version mismatch: master message unclear"
-grep -q "refused: protocol version mismatch: master speaks version 1, worker speaks 2" "$T/v.log" ||
-	fail "version mismatch: worker message unclear"
+wait_for "$T/v.log" "refused: protocol version mismatch: master speaks version 1, worker speaks 2" \
+	"the worker's version mismatch message"
 
 # another core build: its pixels could differ
 start_worker bld -j 1 --test-fault build-id
 "$BIN/portray-master" "$SCENE" -o "$T/x.ppm" --no-local -w "127.0.0.1:$bld_PORT" 2>"$T/m5.log"
 [ $? -eq 69 ] || fail "build mismatch: wrong exit code"
 grep -q "core build mismatch: worker runs '.*-other', master runs" "$T/m5.log" || fail "build mismatch: master message unclear"
-i=0
-until grep -q "peer says: core build mismatch" "$T/bld.log"; do
-	i=$((i + 1))
-	[ $i -gt 40 ] && fail "build mismatch: the worker was not told"
-	sleep 0.05
-done
+wait_for "$T/bld.log" "peer says: core build mismatch" "the worker to be told of the build mismatch"
 
 # all workers refused but local threads allowed: the render completes locally
 "$BIN/portray-master" "$SCENE" -o "$T/l.ppm" -w "127.0.0.1:$v_PORT,127.0.0.1:$s_PORT" 2>"$T/m4.log" ||

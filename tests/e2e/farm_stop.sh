@@ -11,16 +11,12 @@ local_render "$SCENE" "$T/local.ppm" --size 192x144
 	--heartbeat-timeout 1 -w "127.0.0.1:$a_PORT,127.0.0.1:$b_PORT" 2>"$T/m.log" &
 M=$!
 PIDS="$PIDS $M"
-sleep 0.7
+wait_for "$T/a.log" " job .*: started" "worker a to start its job"
 kill -0 $M 2>/dev/null || fail "render ended before the stop: test too fast"
 kill -STOP "$a_PID"
 # wait for the deadline to pass, then continue the worker while the render goes on
-i=0
-until grep -q "no heartbeat" "$T/m.log"; do
-	i=$((i + 1))
-	[ $i -gt 100 ] && fail "master did not notice the stopped worker"
-	sleep 0.05
-done
+wait_for "$T/m.log" "no heartbeat" "the master to notice the stopped worker"
+
 kill -0 $M 2>/dev/null || fail "render ended before the worker was continued"
 kill -CONT "$a_PID"
 wait $M || fail "master failed (exit $?)"
@@ -28,11 +24,6 @@ cmp "$T/local.ppm" "$T/farm.ppm" || fail "image differs after a stopped worker"
 grep -q "worker 127.0.0.1:$a_PORT lost: no heartbeat" "$T/m.log" || fail "master did not report the heartbeat loss"
 grep -q " 0 invalid results" "$T/m.log" || fail "late results were taken as invalid"
 # the continued worker found its old connection gone (or reset)
-i=0
-until grep -q "job .*: [0-9]* tiles in .*\(connection\|reset\|Broken\)" "$T/a.log"; do
-	i=$((i + 1))
-	[ $i -gt 60 ] && fail "worker a did not log the end of its cut-off job"
-	sleep 0.05
-done
+wait_for "$T/a.log" "job .*: [0-9]* tiles in .*\(connection\|reset\|Broken\)" "worker a to log the end of its cut-off job"
 kill -0 "$a_PID" || fail "worker a died"
 echo ok

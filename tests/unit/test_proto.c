@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "check.h"
@@ -314,14 +315,25 @@ static void test_net_and_secret(void)
 	close(fd);
 	uint8_t *s;
 	size_t n;
-	CHECK(proto_read_secret(path, &s, &n, err, sizeof err) == 0 && n == 6 && memcmp(s, "s3cret", 6) == 0);
+	char warn[300];
+	CHECK(chmod(path, 0600) == 0);
+	CHECK(proto_read_secret(path, &s, &n, err, sizeof err, warn, sizeof warn) == 0 && n == 6 && memcmp(s, "s3cret", 6) == 0);
+	CHECK(warn[0] == 0);
+	free(s);
+	/* readable by others: still read, with a warning */
+	CHECK(chmod(path, 0644) == 0);
+	CHECK(proto_read_secret(path, &s, &n, err, sizeof err, warn, sizeof warn) == 0 && strstr(warn, "other users"));
 	free(s);
 	fd = open(path, O_WRONLY | O_TRUNC);
 	CHECK(write(fd, "\n", 1) == 1);
 	close(fd);
-	CHECK(proto_read_secret(path, &s, &n, err, sizeof err) < 0 && strstr(err, "empty"));
+	CHECK(proto_read_secret(path, &s, &n, err, sizeof err, warn, sizeof warn) < 0 && strstr(err, "empty"));
 	unlink(path);
-	CHECK(proto_read_secret(path, &s, &n, err, sizeof err) < 0);
+	CHECK(proto_read_secret(path, &s, &n, err, sizeof err, warn, sizeof warn) < 0);
+	/* a FIFO (or a device) is refused, not read: it could block for ever */
+	CHECK(mkfifo(path, 0600) == 0);
+	CHECK(proto_read_secret(path, &s, &n, err, sizeof err, warn, sizeof warn) < 0 && strstr(err, "regular"));
+	unlink(path);
 
 	/* listen on an OS-chosen port and connect to it */
 	int l = net_listen("127.0.0.1", "0", err, sizeof err);
