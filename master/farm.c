@@ -545,6 +545,9 @@ static void on_result(struct farm *f, struct worker *w, const struct proto_msg *
 		worker_refuse(f, w, PERR_PROTOCOL, "tile %u failed its checksum", t->id);
 		return;
 	}
+	/* a valid tile earns the worker its retries back (reaching READY does
+	 * not: a worker failing every tile after READY was retried for ever) */
+	w->retries = 0;
 	if (k == w->n_inflight) { /* answered after its CANCEL: someone else was first */
 		w->cancelled[c] = w->cancelled[--w->n_cancelled];
 		pthread_mutex_lock(&f->s.mu);
@@ -570,8 +573,10 @@ static void on_result(struct farm *f, struct worker *w, const struct proto_msg *
 static void on_message(struct farm *f, struct worker *w, const struct proto_msg *m)
 {
 	if (m->type == MSG_ERROR) {
+		/* transient: the worker timed out, is shutting down, ran out of
+		 * memory or is busy (connection or transfer limits): try again */
 		bool fatal = m->u.error.code != PERR_TIMEOUT && m->u.error.code != PERR_SHUTDOWN &&
-			     m->u.error.code != PERR_INTERNAL;
+			     m->u.error.code != PERR_INTERNAL && m->u.error.code != PERR_LIMIT;
 		worker_lost(f, w, fatal, "worker says: %s (%s error)", m->u.error.text, proto_err_name(m->u.error.code));
 		return;
 	}
@@ -655,7 +660,6 @@ static void on_message(struct farm *f, struct worker *w, const struct proto_msg 
 		if (m->type == MSG_SCENE_READY && w->state == W_BUILDING &&
 		    memcmp(m->u.ready.hash, f->hash, PROTO_HASH_BYTES) == 0) {
 			w->state = W_READY;
-			w->retries = 0; /* a working connection earns its retries back */
 			dispatch(f, w);
 			return;
 		}

@@ -42,7 +42,15 @@
 /* default scene cache budget, MiB of encoded scene bytes */
 #define WK_CACHE_MB_DEFAULT 1024
 
-enum wk_fault { FAULT_NONE, FAULT_BAD_CHECKSUM, FAULT_WRONG_SIZE, FAULT_PROTO_VERSION, FAULT_BUILD, FAULT_BLACK };
+enum wk_fault {
+	FAULT_NONE,
+	FAULT_BAD_CHECKSUM,
+	FAULT_WRONG_SIZE,
+	FAULT_PROTO_VERSION,
+	FAULT_BUILD,
+	FAULT_BLACK,
+	FAULT_TRACE_FAIL /* every tile fails as if out of memory */
+};
 
 /* ---- options and global state ---- */
 
@@ -166,6 +174,7 @@ struct wk_job {
 	int refs;             /* the connection + tiles being traced */
 	uint32_t running;
 	bool paused;          /* the master is not reading: trace nothing more for it */
+	bool failed;          /* a tile could not be traced (out of memory): end the job */
 };
 
 struct wk_done {
@@ -300,6 +309,8 @@ static void *tracer(void *arg)
 		if (d && px) {
 			struct tile_rect rect = { t.x, t.y, t.w, t.h };
 			ok = renderer_tile_cancellable(r, rect, px, &pool.cancel_all);
+			if (opt.fault == FAULT_TRACE_FAIL)
+				ok = 0;
 			if (opt.delay_ms > 0) {
 				struct timespec ts = { opt.delay_ms / 1000, (long)(opt.delay_ms % 1000) * 1000000L };
 				nanosleep(&ts, NULL);
@@ -316,6 +327,12 @@ static void *tracer(void *arg)
 			push_done(d);
 			wake();
 		} else {
+			/* never drop a tile silently: the master would wait for it
+			 * for ever (only a shutdown cancels tiles on purpose) */
+			if (!atomic_load(&pool.cancel_all)) {
+				j->failed = true;
+				wake();
+			}
 			free(d);
 			free(px);
 			job_unref_locked(j);
@@ -731,6 +748,8 @@ static void on_message(struct wk_conn *c, const struct proto_msg *m)
 	}
 	if (m->type == MSG_HEARTBEAT)
 		return; /* the master is alive: last_rx is updated per frame */
+	if (m->type == MSG_BYE && c->state != ST_CLOSING)
+		goto bye; /* in any state: a master whose render ended before its job started */
 	switch (c->state) {
 	case ST_HELLO: {
 		if (m->type != MSG_HELLO)
@@ -815,7 +834,8 @@ static void on_message(struct wk_conn *c, const struct proto_msg *m)
 	conn_fail(c, PERR_PROTOCOL, "unexpected %s message", proto_type_name(m->type));
 	return;
 bye:
-	job_log(c, "done");
+	job_log(c, "done"); /* (no line for a job that never started) */
+	c->logged = true;
 	c->state = ST_CLOSING;
 	c->deadline = net_now() + 2.0;
 }
@@ -932,6 +952,14 @@ static void accept_all(int lfd)
 	}
 }
 
+static bool job_failed(struct wk_job *j)
+{
+	pthread_mutex_lock(&pool.mu);
+	bool f = j->failed;
+	pthread_mutex_unlock(&pool.mu);
+	return f;
+}
+
 /* Timers: handshake deadlines, idle masters, heartbeats, closing connections. */
 static void tick(void)
 {
@@ -968,6 +996,8 @@ static void tick(void)
 			drop = true;
 		} else if (!drop && c->state == ST_CLOSING && proto_conn_outq(c->pc) == 0) {
 			drop = true;
+		} else if (!drop && c->job && job_failed(c->job)) {
+			conn_fail(c, PERR_INTERNAL, "out of memory tracing a tile");
 		} else if (!drop && c->job) {
 			/* back-pressure: results pile up while the master does not read;
 			 * stop tracing for it until they drain (bounds this job's memory) */
@@ -1071,6 +1101,8 @@ int main(int argc, char **argv)
 				opt.fault = FAULT_BUILD;
 			else if (strcmp(optarg, "black") == 0)
 				opt.fault = FAULT_BLACK;
+			else if (strcmp(optarg, "trace-fail") == 0)
+				opt.fault = FAULT_TRACE_FAIL;
 			else {
 				fprintf(stderr, "portray-worker: unknown --test-fault '%s'\n", optarg);
 				return 64;

@@ -1,6 +1,7 @@
 #!/bin/sh
 # Fake workers that return a tile with a bad checksum or of the wrong size:
 # the tile is re-dispatched, the worker dropped, the image identical.
+# A worker that fails to trace its tiles.
 . "$(dirname "$0")/farm_lib.inc"
 start_worker good -j 1
 start_worker badsum -j 1 --test-fault bad-checksum
@@ -18,4 +19,16 @@ grep -q " [1-9][0-9]* re-dispatched, .* 2 invalid results" "$T/m.log" || fail "s
 grep -q "^portray-master:   127.0.0.1:$badsum_PORT  *0 tiles" "$T/m.log" || fail "a bad tile was counted"
 # the workers were told why
 wait_for "$T/badsum.log" "peer says: tile [0-9]* failed its checksum" "the faulty worker to be told"
+
+# a worker that cannot trace a tile (out of memory) says so instead of
+# dropping it: the master retries, then gives up (--no-local: exit 69)
+# rather than waiting for the tile for ever; with local threads it completes
+start_worker oom -j 1 --test-fault trace-fail
+timeout 120 "$BIN/portray-master" "$SCENE" -o "$T/x.ppm" --no-local -w "127.0.0.1:$oom_PORT" 2>"$T/m2.log"
+rc=$?
+[ $rc -eq 69 ] || fail "worker failing every tile: exit $rc, expected 69"
+grep -q "out of memory tracing a tile" "$T/m2.log" || fail "the master did not report the worker's failure"
+"$BIN/portray-master" "$SCENE" -o "$T/l.ppm" -j 1 -w "127.0.0.1:$oom_PORT" 2>"$T/m3.log" ||
+	fail "render with a failing worker and local threads failed"
+cmp "$T/local.ppm" "$T/l.ppm" || fail "image differs with a failing worker"
 echo ok

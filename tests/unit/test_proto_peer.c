@@ -193,6 +193,13 @@ int main(void)
 	CHECK(c && expect_error(c, PERR_PROTOCOL, "unexpected TILE"));
 	proto_conn_free(c);
 
+	/* a BYE before any job (the master's render ended first): closed, no ERROR */
+	c = hello(ROLE_MASTER, PROTO_VERSION);
+	proto_send_bye(c);
+	proto_conn_flush(c);
+	CHECK(c && !next_real(c, &m));
+	proto_conn_free(c);
+
 	/* a scene over the cache budget (1 MiB here) */
 	uint8_t hash[32] = { 1 };
 	c = hello(ROLE_MASTER, PROTO_VERSION);
@@ -272,6 +279,29 @@ int main(void)
 	proto_send_bye(c);
 	proto_conn_flush(c);
 	CHECK(!next_real(c, &m)); /* BYE: the worker closes */
+	proto_conn_free(c);
+
+	/* a flood of connections: past the worker's limit (256) each new one is
+	 * told ERROR(limit) and closed; the others are still served */
+	enum { FLOOD = 256 };
+	static struct proto_conn *flood[FLOOD];
+	int n_flood = 0;
+	for (int i = 0; i < FLOOD; i++)
+		if ((flood[i] = dial()))
+			n_flood++;
+	CHECK(n_flood == FLOOD);
+	c = dial();
+	CHECK(c && next_real(c, &m) && m.type == MSG_ERROR && m.u.error.code == PERR_LIMIT);
+	proto_conn_free(c);
+	for (int i = 0; i < FLOOD; i++)
+		proto_conn_free(flood[i]);
+	c = NULL;
+	for (int i = 0; i < 100 && !c; i++) { /* served again once the flood is gone */
+		c = hello(ROLE_MASTER, PROTO_VERSION);
+		if (!c)
+			usleep(50000);
+	}
+	CHECK(c != NULL);
 	proto_conn_free(c);
 
 	/* every connection above is closed: the worker holds no more fds than
