@@ -10,7 +10,7 @@
 #define BVH_BINS 16
 /* SAH constants relative to one primitive test */
 #define BVH_COST_TRAV 1.0
-#define BVH_COST_ISECT 2.0
+#define BVH_COST_ISECT 1.0
 
 struct bvh_ctx {
 	const struct geom_box *boxes;
