@@ -786,6 +786,7 @@ static int is_png_name(const char *path)
  * file is removed and -1 is returned with errno set. A path that exists and
  * is not a regular file (a device such as /dev/null, a FIFO) is written in
  * place instead: renaming over it would replace the device or pipe itself.
+ * A symbolic link is followed (its target is replaced, the link stays).
  */
 int img_write(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h)
 {
@@ -806,7 +807,12 @@ int img_write(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h)
 		hn = snprintf(head, sizeof head, "P6\n%u %u\n255\n", (unsigned)w, (unsigned)h);
 	}
 
+	/* a symbolic link is written through: the temporary goes next to its
+	 * target and is renamed over the target, and the link stays */
 	struct stat st;
+	char *real = NULL;
+	if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode) && (real = realpath(path, NULL)) != NULL)
+		path = real;
 	if (stat(path, &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) {
 		int fd = open(path, O_WRONLY | O_CLOEXEC);
 		int rc = fd < 0 ? -1 : write_image(fd, data, n, head, hn, rgb, w, h);
@@ -814,6 +820,7 @@ int img_write(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h)
 		if (fd >= 0 && close(fd) < 0 && rc == 0)
 			e = errno, rc = -1;
 		free(data);
+		free(real);
 		errno = e;
 		return rc;
 	}
@@ -822,6 +829,7 @@ int img_write(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h)
 	char *tmp = malloc(plen + 64);
 	if (!tmp) {
 		free(data);
+		free(real);
 		errno = ENOMEM;
 		return -1;
 	}
@@ -837,6 +845,7 @@ int img_write(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h)
 		int e = errno;
 		free(data);
 		free(tmp);
+		free(real);
 		errno = e;
 		return -1;
 	}
@@ -852,7 +861,10 @@ int img_write(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h)
 		unlink(tmp);
 		errno = e;
 	}
+	int e = errno;
 	free(data);
 	free(tmp);
+	free(real);
+	errno = e;
 	return rc == 0 ? 0 : -1;
 }

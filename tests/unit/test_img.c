@@ -469,6 +469,38 @@ static void test_special_output(void)
 	free(img);
 }
 
+/*
+ * An output that is a symbolic link is written through the link: the target
+ * gets the image and the link stays (renaming over the link replaced it with
+ * a plain file; as root, -o /dev/stdout replaced the /dev/stdout link).
+ */
+static void test_symlink_output(void)
+{
+	char dir[] = "/tmp/test_img_link_XXXXXX";
+	if (!mkdtemp(dir)) {
+		CHECK(0);
+		return;
+	}
+	char target[256], link[256];
+	snprintf(target, sizeof target, "%s/real.ppm", dir);
+	snprintf(link, sizeof link, "%s/link.ppm", dir);
+	FILE *f = fopen(target, "wb");
+	CHECK(f != NULL);
+	if (f)
+		fclose(f);
+	CHECK(symlink("real.ppm", link) == 0);
+	uint8_t *img = make_image(P_FLAT, 4, 3);
+	CHECK(img_write(link, img, 4, 3) == 0);
+	struct stat st;
+	CHECK(lstat(link, &st) == 0 && S_ISLNK(st.st_mode));
+	CHECK(stat(target, &st) == 0 && st.st_size == (off_t)(strlen("P6\n4 3\n255\n") + 4 * 3 * 3));
+	CHECK(count_tmp_files(dir) == 0);
+	unlink(link);
+	unlink(target);
+	CHECK(rmdir(dir) == 0);
+	free(img);
+}
+
 /* Writes sample PNGs and their pixels for tests/cli/png_python.sh. */
 static int write_samples(const char *dir)
 {
@@ -504,5 +536,6 @@ int main(int argc, char **argv)
 	test_png_roundtrips();
 	test_files();
 	test_special_output();
+	test_symlink_output();
 	TEST_MAIN_END();
 }
