@@ -92,7 +92,7 @@ static void test_whitespace(void)
 		"0 0 0 1 0 0 0 1 0\r1 0 0 1 1 0 0 1 0\r",        /* old Mac CR */
 		"\n\n   \n0 0 0 1 0 0 0 1 0   \n \t \n  1 0 0 1 1 0 0 1 0\n\n\n", /* blanks */
 		"\f0 0 0 1 0 0 0 1 0\v\n1 0 0 1 1 0 0 1 0\r\n\r\n",
-		"\xEF\xBB\xBF" "0 0 0 1 0 0 0 1 0\r\n1 0 0 1 1 0 0 1 0\r\n", /* UTF-8 byte-order mark */
+		("\xEF\xBB\xBF" "0 0 0 1 0 0 0 1 0\r\n1 0 0 1 1 0 0 1 0\r\n"), /* UTF-8 byte-order mark */
 	};
 	for (size_t i = 0; i < sizeof variants / sizeof variants[0]; i++) {
 		struct scene_mesh m;
