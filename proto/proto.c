@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/random.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -97,10 +98,26 @@ const char *proto_err_name(int code)
 
 int proto_random(uint8_t *p, size_t n)
 {
+	/* getrandom(): the kernel's CSPRNG without a file descriptor (a worker
+	 * at its descriptor limit could not open /dev/urandom and refused every
+	 * peer); /dev/urandom only where the call does not exist */
+	size_t got = 0;
+	while (got < n) {
+		ssize_t r = getrandom(p + got, n - got, 0);
+		if (r < 0 && errno == EINTR)
+			continue;
+		if (r <= 0)
+			break;
+		got += (size_t)r;
+	}
+	if (got == n)
+		return 0;
+	if (errno != ENOSYS)
+		return -1;
 	int fd = open("/dev/urandom", O_RDONLY | O_CLOEXEC);
 	if (fd < 0)
 		return -1;
-	size_t got = 0;
+	got = 0;
 	while (got < n) {
 		ssize_t r = read(fd, p + got, n - got);
 		if (r < 0 && errno == EINTR)

@@ -161,7 +161,7 @@ const char *proto_build_id(void);
 /* Name of a message type and of an error code, for logs. */
 const char *proto_type_name(int type);
 const char *proto_err_name(int code);
-/* Fills n bytes from the OS's random source; 0 or -1. */
+/* Fills n bytes from the OS's random source (getrandom, else /dev/urandom); 0 or -1. */
 int proto_random(uint8_t *p, size_t n);
 
 /* ---- a buffered non-blocking connection ---- */

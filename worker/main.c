@@ -39,6 +39,8 @@
 #define WK_HANDSHAKE_S 10.0
 /* a master that sends nothing for this long (it heartbeats) is gone */
 #define WK_IDLE_MIN_S 30.0
+/* seconds the listening socket rests after accept() ran out of descriptors */
+#define WK_ACCEPT_PAUSE_S 0.25
 /* default scene cache budget, MiB of encoded scene bytes */
 #define WK_CACHE_MB_DEFAULT 1024
 
@@ -912,13 +914,26 @@ static void drain_done(void)
 	}
 }
 
+/* while out of file descriptors the listening socket is not polled until then
+ * (it stays readable, and poll() would return at once for ever: a busy loop) */
+static double accept_paused_until;
+
 static void accept_all(int lfd)
 {
 	for (;;) {
 		char peer[96];
 		int fd = net_accept(lfd, peer, sizeof peer);
-		if (fd < 0)
+		if (fd < 0) {
+			if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
+				if (accept_paused_until == 0)
+					wk_log("cannot accept: %s; pausing accepts", strerror(errno));
+				accept_paused_until = net_now() + WK_ACCEPT_PAUSE_S;
+			} else {
+				accept_paused_until = 0;
+			}
 			return;
+		}
+		accept_paused_until = 0;
 		struct wk_conn *c = calloc(1, sizeof *c);
 		struct proto_conn *pc = c ? proto_conn_new(fd) : NULL;
 		if (!pc || n_conns >= WK_MAX_CONNS) {
@@ -1181,7 +1196,8 @@ int main(int argc, char **argv)
 	struct pollfd *pfd = calloc(WK_MAX_CONNS + 2, sizeof *pfd);
 	while (!stop_flag && pfd) {
 		size_t n = 0;
-		pfd[n++] = (struct pollfd){ .fd = lfd, .events = POLLIN };
+		bool accepting = net_now() >= accept_paused_until;
+		pfd[n++] = (struct pollfd){ .fd = accepting ? lfd : -1, .events = POLLIN };
 		pfd[n++] = (struct pollfd){ .fd = wake_pipe[0], .events = POLLIN };
 		for (size_t i = 0; i < n_conns; i++) {
 			short ev = conns[i]->state == ST_CLOSING ? 0 : POLLIN;

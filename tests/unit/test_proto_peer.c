@@ -13,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -117,6 +118,90 @@ static int count_fds(pid_t pid)
 		n += e->d_name[0] != '.';
 	closedir(d);
 	return n;
+}
+
+/* CPU time (user + system, clock ticks) used so far by process pid, or -1. */
+static long cpu_ticks(pid_t pid)
+{
+	char path[64], buf[1024];
+	snprintf(path, sizeof path, "/proc/%d/stat", (int)pid);
+	FILE *f = fopen(path, "r");
+	if (!f)
+		return -1;
+	size_t n = fread(buf, 1, sizeof buf - 1, f);
+	fclose(f);
+	buf[n] = 0;
+	char *p = strrchr(buf, ')'); /* fields after the command name */
+	unsigned long ut, st;
+	if (!p || sscanf(p + 2, "%*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %lu %lu", &ut, &st) != 2)
+		return -1;
+	return (long)(ut + st);
+}
+
+/*
+ * A worker out of file descriptors (RLIMIT_NOFILE 16) under a flood of
+ * connections: accept() fails with EMFILE while the listening socket stays
+ * readable; the worker must not spin on it, and serves again afterwards.
+ */
+static void test_out_of_fds(void)
+{
+	char pf2[] = "/tmp/portray-peer-fds-XXXXXX";
+	int fd = mkstemp(pf2);
+	close(fd);
+	unlink(pf2);
+	pid_t pid = fork();
+	if (pid == 0) {
+		struct rlimit rl = { 16, 16 };
+		setrlimit(RLIMIT_NOFILE, &rl);
+		int null = open("/dev/null", O_WRONLY);
+		dup2(null, 2);
+		close(null);
+		execl("bin/portray-worker", "portray-worker", "--listen", "127.0.0.1:0", "--port-file", pf2, "-j", "1",
+		      (char *)NULL);
+		_exit(127);
+	}
+	char saved[16];
+	memcpy(saved, port, sizeof saved);
+	port[0] = 0;
+	for (int i = 0; i < 200 && !port[0]; i++) {
+		FILE *f = fopen(pf2, "r");
+		if (f) {
+			if (fscanf(f, "%15s", port) != 1)
+				port[0] = 0;
+			fclose(f);
+		}
+		if (!port[0])
+			usleep(20000);
+	}
+	CHECK(port[0] != 0);
+	enum { N = 40 };
+	struct proto_conn *cs[N];
+	for (int i = 0; i < N; i++)
+		cs[i] = dial(); /* the kernel's backlog takes them all */
+	usleep(300000);
+	long t0 = cpu_ticks(pid);
+	usleep(1500000);
+	long t1 = cpu_ticks(pid);
+	/* a busy loop burns ~150 ticks here; an idle worker about none */
+	CHECK(t0 >= 0 && t1 - t0 < 40);
+	if (t1 - t0 >= 40)
+		fprintf(stderr, "worker out of fds used %ld ticks in 1.5 s\n", t1 - t0);
+	for (int i = 0; i < N; i++)
+		proto_conn_free(cs[i]);
+	struct proto_conn *c = NULL;
+	for (int i = 0; i < 100 && !c; i++) { /* served again */
+		c = hello(ROLE_MASTER, PROTO_VERSION);
+		if (!c)
+			usleep(50000);
+	}
+	CHECK(c != NULL);
+	proto_conn_free(c);
+	kill(pid, SIGTERM);
+	int st = -1;
+	waitpid(pid, &st, 0);
+	CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+	unlink(pf2);
+	memcpy(port, saved, sizeof saved);
 }
 
 int main(void)
@@ -312,6 +397,8 @@ int main(void)
 	CHECK(fds0 > 0 && fds1 == fds0);
 	if (fds1 != fds0)
 		fprintf(stderr, "worker fds: %d before, %d after\n", fds0, fds1);
+
+	test_out_of_fds();
 
 	renderer_free(r);
 	free(enc);
