@@ -121,7 +121,13 @@ int master_render(const struct master_opts *o)
 		rc = EXIT_IO;
 		goto done;
 	}
-	if (partial) {
+	if (partial && !atomic_load(&cancel)) {
+		/* no interrupt, yet tiles are missing: every render thread failed to get
+		 * its tile buffer. Appendix B level 2: unable to allocate heap space. */
+		fprintf(stderr, "portray-master: out of memory: %llu of %llu tiles rendered; partial image "
+			"written to %s\n", (unsigned long long)finished, (unsigned long long)total, out);
+		rc = ERRLEVEL_LEVEL2;
+	} else if (partial) {
 		const char *why = interrupt_reason() == INTERRUPT_KEY ? "stopped" : "interrupted";
 		if (farm)
 			fprintf(stderr, "portray-master: %s: partial image written to %s\n", why, out);
