@@ -204,6 +204,96 @@ static void test_out_of_fds(void)
 	memcpy(port, saved, sizeof saved);
 }
 
+/*
+ * A worker with a shared secret: before the master's proof is checked it acts
+ * on nothing else. A scene offer instead of AUTH is refused unparsed, a scene
+ * chunk is refused from its header (longer than a handshake frame), and a
+ * wrong proof is ERROR(auth); the right one gets the worker's proof back.
+ */
+static void test_secret_first(void)
+{
+	char pf2[] = "/tmp/portray-peer-sec-XXXXXX", sf[] = "/tmp/portray-peer-key-XXXXXX";
+	int fd = mkstemp(pf2);
+	close(fd);
+	unlink(pf2);
+	fd = mkstemp(sf);
+	CHECK(fd >= 0 && write(fd, "k3y\n", 4) == 4);
+	close(fd);
+	pid_t pid = fork();
+	if (pid == 0) {
+		int null = open("/dev/null", O_WRONLY);
+		dup2(null, 2);
+		close(null);
+		execl("bin/portray-worker", "portray-worker", "--listen", "127.0.0.1:0", "--port-file", pf2, "-j", "1",
+		      "--secret-file", sf, (char *)NULL);
+		_exit(127);
+	}
+	char saved[16];
+	memcpy(saved, port, sizeof saved);
+	port[0] = 0;
+	for (int i = 0; i < 200 && !port[0]; i++) {
+		FILE *f = fopen(pf2, "r");
+		if (f) {
+			if (fscanf(f, "%15s", port) != 1)
+				port[0] = 0;
+			fclose(f);
+		}
+		if (!port[0])
+			usleep(20000);
+	}
+	CHECK(port[0] != 0);
+	struct proto_msg m;
+	uint8_t hash[32] = { 3 }, chunk[2000] = { 0 };
+	for (int round = 0; round < 4; round++) {
+		struct proto_conn *c = dial();
+		CHECK(c != NULL);
+		if (!c)
+			break;
+		uint8_t wnonce[PROTO_NONCE_BYTES] = { 0 };
+		CHECK(next_real(c, &m) && m.type == MSG_HELLO && m.u.hello.secret == 1);
+		memcpy(wnonce, m.u.hello.nonce, sizeof wnonce);
+		struct proto_hello h;
+		memset(&h, 0, sizeof h);
+		h.version = PROTO_VERSION;
+		h.role = ROLE_MASTER;
+		h.secret = 1;
+		h.heartbeat_ms = 200;
+		memset(h.nonce, 7, sizeof h.nonce);
+		snprintf(h.build, sizeof h.build, "%s", proto_build_id());
+		proto_send_hello(c, &h);
+		uint8_t mac[PROTO_MAC_BYTES];
+		if (round == 0) { /* an offer instead of the proof */
+			proto_send_offer(c, hash, 100, 64, 48);
+			proto_conn_flush(c);
+			CHECK(expect_error(c, PERR_PROTOCOL, "unexpected SCENE_OFFER"));
+		} else if (round == 1) { /* scene bytes instead of the proof */
+			proto_send_data(c, 0, chunk, sizeof chunk);
+			proto_conn_flush(c);
+			CHECK(expect_error(c, PERR_LIMIT, NULL));
+		} else if (round == 2) { /* a proof under another key */
+			proto_auth_mac((const uint8_t *)"k3Y", 3, ROLE_MASTER, h.nonce, wnonce, mac);
+			proto_send_auth(c, mac);
+			proto_conn_flush(c);
+			CHECK(expect_error(c, PERR_AUTH, "authentication failed"));
+		} else { /* the right proof: the worker proves itself in turn */
+			proto_auth_mac((const uint8_t *)"k3y", 3, ROLE_MASTER, h.nonce, wnonce, mac);
+			proto_send_auth(c, mac);
+			proto_conn_flush(c);
+			uint8_t want[PROTO_MAC_BYTES];
+			proto_auth_mac((const uint8_t *)"k3y", 3, ROLE_WORKER, h.nonce, wnonce, want);
+			CHECK(next_real(c, &m) && m.type == MSG_AUTH && proto_mac_equal(m.u.mac, want, sizeof want));
+		}
+		proto_conn_free(c);
+	}
+	kill(pid, SIGTERM);
+	int st = -1;
+	waitpid(pid, &st, 0);
+	CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+	unlink(pf2);
+	unlink(sf);
+	memcpy(port, saved, sizeof saved);
+}
+
 int main(void)
 {
 	signal(SIGPIPE, SIG_IGN);
@@ -399,6 +489,7 @@ int main(void)
 		fprintf(stderr, "worker fds: %d before, %d after\n", fds0, fds1);
 
 	test_out_of_fds();
+	test_secret_first();
 
 	renderer_free(r);
 	free(enc);
