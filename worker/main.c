@@ -63,6 +63,7 @@ static struct {
 	uint64_t cache_bytes;
 	enum wk_fault fault;
 	int delay_ms;      /* test hook: extra time per tile, so tests can act mid-render */
+	double handshake_s; /* accept to scene offer (WK_HANDSHAKE_S; a test hook shortens it) */
 } opt;
 
 static volatile sig_atomic_t stop_flag;
@@ -954,7 +955,7 @@ static void accept_all(int lfd)
 		snprintf(c->peer, sizeof c->peer, "%s", peer);
 		c->state = ST_HELLO;
 		c->last_rx = c->started = net_now();
-		c->deadline = c->started + WK_HANDSHAKE_S;
+		c->deadline = c->started + opt.handshake_s;
 		c->hb_interval = 1.0;
 		if (proto_random(c->nonce, sizeof c->nonce) < 0) {
 			proto_conn_free(pc);
@@ -985,7 +986,7 @@ static void tick(void)
 		if (c->state == ST_CLOSING) {
 			drop = proto_conn_outq(c->pc) == 0 || now > c->deadline;
 		} else if (c->state < ST_RECV && now > c->deadline) {
-			conn_fail(c, PERR_TIMEOUT, "handshake took longer than %.0f s", WK_HANDSHAKE_S);
+			conn_fail(c, PERR_TIMEOUT, "handshake took longer than %.1f s", opt.handshake_s);
 		} else if (c->state >= ST_OFFER) {
 			/* heartbeats from the offer on: a long scene transfer or build
 			 * must not look like a dead worker to the master */
@@ -1066,7 +1067,7 @@ static int write_port_file(const char *path, int port)
 	return 0;
 }
 
-enum { OPT_LISTEN = 256, OPT_SECRET, OPT_PORTFILE, OPT_CACHE, OPT_FAULT, OPT_DELAY };
+enum { OPT_LISTEN = 256, OPT_SECRET, OPT_PORTFILE, OPT_CACHE, OPT_FAULT, OPT_DELAY, OPT_HANDSHAKE };
 
 int main(int argc, char **argv)
 {
@@ -1078,6 +1079,7 @@ int main(int argc, char **argv)
 		{ "cache-mb", required_argument, NULL, OPT_CACHE },
 		{ "test-fault", required_argument, NULL, OPT_FAULT }, /* hidden: for tests */
 		{ "test-delay-ms", required_argument, NULL, OPT_DELAY }, /* hidden: for tests */
+		{ "test-handshake-ms", required_argument, NULL, OPT_HANDSHAKE }, /* hidden: for tests */
 		{ "help", no_argument, NULL, 'h' },
 		{ "version", no_argument, NULL, 'V' },
 		{ NULL, 0, NULL, 0 },
@@ -1130,6 +1132,15 @@ int main(int argc, char **argv)
 				return 64;
 			}
 			break;
+		case OPT_HANDSHAKE: {
+			long ms = strtol(optarg, &end, 10);
+			if (*end || ms < 1 || ms > 600000) {
+				fprintf(stderr, "portray-worker: --test-handshake-ms wants 1..600000\n");
+				return 64;
+			}
+			opt.handshake_s = ms / 1000.0;
+			break;
+		}
 		case 'h': usage(stdout); return 0;
 		case 'V': printf("portray-worker %s (protocol %u, %s)\n", PORTRAY_VERSION, PROTO_VERSION, proto_build_id()); return 0;
 		default: usage(stderr); return 64;
@@ -1142,6 +1153,8 @@ int main(int argc, char **argv)
 	}
 	if (opt.threads == 0)
 		opt.threads = render_ncpus();
+	if (opt.handshake_s == 0)
+		opt.handshake_s = WK_HANDSHAKE_S;
 	opt.cache_bytes = (uint64_t)cache_mb << 20;
 	char err[512], warn[512];
 	if (secret_file &&

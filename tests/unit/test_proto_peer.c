@@ -294,6 +294,75 @@ static void test_secret_first(void)
 	memcpy(port, saved, sizeof saved);
 }
 
+/*
+ * Slowloris: a peer that trickles a HELLO one byte at a time (each byte a
+ * sign of life at the socket level, never a whole frame) is cut off at the
+ * handshake deadline with ERROR(timeout). The worker here gets 1 s.
+ */
+static void test_slow_handshake(void)
+{
+	char pf2[] = "/tmp/portray-peer-slow-XXXXXX";
+	int fd = mkstemp(pf2);
+	close(fd);
+	unlink(pf2);
+	pid_t pid = fork();
+	if (pid == 0) {
+		int null = open("/dev/null", O_WRONLY);
+		dup2(null, 2);
+		close(null);
+		execl("bin/portray-worker", "portray-worker", "--listen", "127.0.0.1:0", "--port-file", pf2, "-j", "1",
+		      "--test-handshake-ms", "1000", (char *)NULL);
+		_exit(127);
+	}
+	char saved[16];
+	memcpy(saved, port, sizeof saved);
+	port[0] = 0;
+	for (int i = 0; i < 200 && !port[0]; i++) {
+		FILE *f = fopen(pf2, "r");
+		if (f) {
+			if (fscanf(f, "%15s", port) != 1)
+				port[0] = 0;
+			fclose(f);
+		}
+		if (!port[0])
+			usleep(20000);
+	}
+	CHECK(port[0] != 0);
+	struct proto_conn *c = dial();
+	CHECK(c != NULL);
+	struct proto_msg m;
+	int got_error = 0;
+	if (c && next_real(c, &m) && m.type == MSG_HELLO) {
+		uint8_t hdr[12]; /* a HELLO header announcing 100 bytes, then zeros */
+		proto_wr32(hdr, PROTO_MAGIC), proto_wr16(hdr + 4, 1), proto_wr16(hdr + 6, MSG_HELLO);
+		proto_wr32(hdr + 8, 100);
+		double until = net_now() + 30; /* generous: the deadline is 1 s */
+		for (int i = 0; i < 12 + 100 && net_now() < until && !got_error; i++) {
+			uint8_t b = i < 12 ? hdr[i] : 0;
+			if (send(proto_conn_fd(c), &b, 1, MSG_NOSIGNAL) != 1)
+				break;
+			struct pollfd p = { proto_conn_fd(c), POLLIN, 0 };
+			if (poll(&p, 1, 200) > 0) {
+				const char *why;
+				int code;
+				if (proto_conn_read(c, &why) < 0)
+					break;
+				while (proto_conn_next(c, &m, &code, &why) == 1)
+					if (m.type == MSG_ERROR && m.u.error.code == PERR_TIMEOUT)
+						got_error = 1;
+			}
+		}
+	}
+	CHECK(got_error);
+	proto_conn_free(c);
+	kill(pid, SIGTERM);
+	int st = -1;
+	waitpid(pid, &st, 0);
+	CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+	unlink(pf2);
+	memcpy(port, saved, sizeof saved);
+}
+
 int main(void)
 {
 	signal(SIGPIPE, SIG_IGN);
@@ -490,6 +559,7 @@ int main(void)
 
 	test_out_of_fds();
 	test_secret_first();
+	test_slow_handshake();
 
 	renderer_free(r);
 	free(enc);
