@@ -176,7 +176,13 @@ struct wk_job {
 	size_t head, len, cap;
 	int refs;             /* the connection + tiles being traced */
 	uint32_t running;
-	bool paused;          /* the master is not reading: trace nothing more for it */
+	/* back-pressure: result bytes held for this job = traced_bytes (tiles
+	 * taken by tracers and not yet queued on the socket) + outq_bytes (the
+	 * socket's queue at the loop's last look); no tile is taken while they
+	 * exceed PROTO_OUT_HIGH_WATER, so a master that does not read costs at
+	 * most that plus one tile per thread, however late the loop runs */
+	size_t traced_bytes, outq_bytes;
+	bool paused;          /* a tracer skipped it for that reason (the loop wakes them) */
 	bool failed;          /* a tile could not be traced (out of memory): end the job */
 };
 
@@ -290,7 +296,11 @@ static void *tracer(void *arg)
 		struct wk_job *j = NULL;
 		for (size_t k = 0; k < pool.n_jobs; k++) {
 			struct wk_job *c = pool.jobs[(pool.cursor + k) % pool.n_jobs];
-			if (c->head < c->len && c->conn && !c->paused) {
+			if (c->head < c->len && c->conn) {
+				if (c->traced_bytes + c->outq_bytes > PROTO_OUT_HIGH_WATER) {
+					c->paused = true;
+					continue;
+				}
 				j = c;
 				pool.cursor = (pool.cursor + k + 1) % pool.n_jobs;
 				break;
@@ -303,6 +313,7 @@ static void *tracer(void *arg)
 		struct proto_tile t = j->q[j->head++];
 		j->refs++;
 		j->running++;
+		j->traced_bytes += (size_t)t.w * t.h * 3;
 		const struct renderer *r = j->entry->r;
 		pthread_mutex_unlock(&pool.mu);
 
@@ -336,6 +347,7 @@ static void *tracer(void *arg)
 				j->failed = true;
 				wake();
 			}
+			j->traced_bytes -= (size_t)t.w * t.h * 3;
 			free(d);
 			free(px);
 			job_unref_locked(j);
@@ -907,6 +919,10 @@ static void drain_done(void)
 			}
 			free(d->pixels);
 			pthread_mutex_lock(&pool.mu);
+			/* the bytes now sit in the output queue (or are gone) */
+			d->job->traced_bytes -= (size_t)d->tile.w * d->tile.h * 3;
+			if (c)
+				d->job->outq_bytes = proto_conn_outq(c->pc);
 			job_unref_locked(d->job);
 			pthread_mutex_unlock(&pool.mu);
 		}
@@ -1015,16 +1031,17 @@ static void tick(void)
 		} else if (!drop && c->job && job_failed(c->job)) {
 			conn_fail(c, PERR_INTERNAL, "out of memory tracing a tile");
 		} else if (!drop && c->job) {
-			/* back-pressure: results pile up while the master does not read;
-			 * stop tracing for it until they drain (bounds this job's memory) */
-			bool full = proto_conn_outq(c->pc) > PROTO_OUT_HIGH_WATER;
-			if (full != c->job->paused) {
-				pthread_mutex_lock(&pool.mu);
-				c->job->paused = full;
-				if (!full)
-					pthread_cond_broadcast(&pool.cv);
-				pthread_mutex_unlock(&pool.mu);
+			/* back-pressure: the tracers see how much of this job's
+			 * output waits; wake them when a paused job has room again */
+			size_t q = proto_conn_outq(c->pc);
+			pthread_mutex_lock(&pool.mu);
+			struct wk_job *j = c->job;
+			j->outq_bytes = q;
+			if (j->paused && j->traced_bytes + q <= PROTO_OUT_HIGH_WATER) {
+				j->paused = false;
+				pthread_cond_broadcast(&pool.cv);
 			}
+			pthread_mutex_unlock(&pool.mu);
 		}
 		if (drop) {
 			conn_close(i);

@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "common/parse.h"
 #include "common/render.h"
 #include "proto/net.h"
 #include "proto/proto.h"
@@ -363,6 +364,87 @@ static void test_slow_handshake(void)
 	memcpy(port, saved, sizeof saved);
 }
 
+/* Resident memory of process pid in KiB (Linux /proc), or -1. */
+static long rss_kib(pid_t pid)
+{
+	char path[64], line[256];
+	snprintf(path, sizeof path, "/proc/%d/status", (int)pid);
+	FILE *f = fopen(path, "r");
+	if (!f)
+		return -1;
+	long kib = -1;
+	while (fgets(line, sizeof line, f))
+		if (sscanf(line, "VmRSS: %ld", &kib) == 1)
+			break;
+	fclose(f);
+	return kib;
+}
+
+/*
+ * Back-pressure: a master that queues 1000 tiles of 128x128 (48 MiB of
+ * results) and reads nothing. The worker pauses the job once about
+ * PROTO_OUT_HIGH_WATER of results wait, so its memory stays far below the
+ * 48 MiB; when the master reads again every result arrives, checked.
+ */
+static void test_back_pressure(pid_t pid)
+{
+	static const char text[] = "image xsize 16 ysize 16 ;\n"; /* empty: tiles cost next to nothing */
+	struct scene *s = NULL;
+	struct scene_error err;
+	uint8_t *enc = NULL, hash[32];
+	size_t len = 0;
+	CHECK(parse_buffer("bp.sce", text, sizeof text - 1, 0, &s, &err) == 0);
+	CHECK(s && proto_scene_encode(s, &enc, &len) == 0);
+	scene_free(s);
+	if (!enc)
+		return;
+	proto_scene_hash(enc, len, hash);
+	struct proto_conn *c = hello(ROLE_MASTER, PROTO_VERSION);
+	struct proto_msg m;
+	CHECK(c != NULL);
+	if (!c) {
+		free(enc);
+		return;
+	}
+	proto_send_offer(c, hash, len, 1024, 1024);
+	CHECK(next_real(c, &m) && (m.type == MSG_SCENE_NEED || m.type == MSG_SCENE_HAVE));
+	if (m.type == MSG_SCENE_NEED)
+		proto_send_data(c, 0, enc, (uint32_t)len);
+	free(enc);
+	CHECK(next_real(c, &m) && m.type == MSG_SCENE_READY);
+	long rss0 = rss_kib(pid);
+	enum { N = 1000, SIDE = 128 };
+	for (uint32_t i = 0; i < N; i++) {
+		struct proto_tile t = { i, (i % 8) * SIDE, (i / 8 % 8) * SIDE, SIDE, SIDE };
+		proto_send_tile(c, &t);
+	}
+	while (proto_conn_outq(c) > 0) { /* the tiles go out; nothing is read */
+		struct pollfd p = { proto_conn_fd(c), POLLOUT, 0 };
+		poll(&p, 1, 100);
+		proto_conn_flush(c);
+	}
+	/* wait until the worker's memory settles (it pauses, or finishes all) */
+	long prev = -1, rss1 = rss_kib(pid);
+	for (int stable = 0, i = 0; i < 200 && stable < 5; i++) {
+		usleep(100000);
+		prev = rss1;
+		rss1 = rss_kib(pid);
+		stable = rss1 == prev ? stable + 1 : 0;
+	}
+	CHECK(rss0 > 0 && rss1 > 0 && rss1 - rss0 < 20 * 1024);
+	if (rss1 - rss0 >= 20 * 1024)
+		fprintf(stderr, "worker grew by %ld KiB with a master that does not read\n", rss1 - rss0);
+	/* now read: every tile arrives, with the right checksum */
+	uint32_t got = 0, good = 0;
+	while (got < N && next_real(c, &m) && m.type == MSG_TILE_RESULT) {
+		size_t n = (size_t)m.u.result.tile.w * m.u.result.tile.h * 3;
+		good += m.u.result.tile.w == SIDE && proto_crc32(0, m.u.result.pixels, n) == m.u.result.crc;
+		got++;
+	}
+	CHECK(got == N && good == N);
+	proto_conn_free(c);
+}
+
 int main(void)
 {
 	signal(SIGPIPE, SIG_IGN);
@@ -557,6 +639,7 @@ int main(void)
 	if (fds1 != fds0)
 		fprintf(stderr, "worker fds: %d before, %d after\n", fds0, fds1);
 
+	test_back_pressure(pid);
 	test_out_of_fds();
 	test_secret_first();
 	test_slow_handshake();
