@@ -188,8 +188,14 @@ struct ray4 {
 #else
 	float o[3], inv[3];
 #endif
+	/* per axis, the float offset in a bvh4 of the near plane's row (lo[k]
+	 * for a positive direction, hi[k] for a negative one) and of the far
+	 * plane's: the "sign" trick, no min/max between the two planes */
+	uint32_t near[3], far[3];
 	double tscale; /* box-space t = ray t * tscale */
 };
+
+_Static_assert(offsetof(struct bvh4, hi) == 12 * sizeof(float), "bvh4 rows: lo[3][4] then hi[3][4]");
 
 /* 2^e for an integer e in [-1022, 1023], exactly. */
 static inline double pow2(int e)
@@ -217,6 +223,9 @@ static inline void ray4_init(struct ray4 *q, const struct trace *r, vec3 center)
 	for (int k = 0; k < 3; k++) {
 		double dk = d[k] * s;
 		float iv = (float)(fabs(dk) > 1e-30 ? 1.0 / dk : copysign(1e30, dk));
+		uint32_t lo = (uint32_t)(4 * k), hi = (uint32_t)(12 + 4 * k); /* rows of bvh4 lo[k], hi[k] */
+		q->near[k] = signbit(iv) ? hi : lo;
+		q->far[k] = signbit(iv) ? lo : hi;
 #if defined(__SSE2__)
 		q->o[k] = _mm_set1_ps((float)o[k]);
 		q->inv[k] = _mm_set1_ps(iv);
@@ -230,18 +239,26 @@ static inline void ray4_init(struct ray4 *q, const struct trace *r, vec3 center)
 /*
  * Slab test of the four children of nd against [tmin, tmax] (box space).
  * Returns a mask (bit c: child c may be hit) and the widened entry
- * distances in tn. NaN bounds (unused slots) never hit: min/max return
- * their second operand when one is NaN, as SSE's do.
+ * distances in tn.
+ *
+ * The near plane of each axis is chosen once per ray by the direction's
+ * sign (ray4.near/far). This is exactly the old min/max form: inv is never
+ * 0, inf or NaN, and lo <= hi, so (lo - o) * inv and (hi - o) * inv are
+ * ordered by inv's sign (rounding is monotonic); min/max would pick the
+ * same values (up to the sign of a zero, which no comparison sees). NaN
+ * bounds (unused slots) never hit: max returns its second operand when one
+ * is NaN, as SSE's does, so t0 becomes NaN and t0 <= t1 fails.
  */
 static inline int node4_hit(const struct bvh4 *nd, const struct ray4 *q, float tmin, float tmax, float tn[4])
 {
+	const float *b = (const float *)(const void *)nd; /* lo[3][4] then hi[3][4] */
 #if defined(__SSE2__)
 	__m128 t0 = _mm_set1_ps(tmin), t1 = _mm_set1_ps(tmax);
 	for (int k = 0; k < 3; k++) {
-		__m128 ta = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(nd->lo[k]), q->o[k]), q->inv[k]);
-		__m128 tb = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(nd->hi[k]), q->o[k]), q->inv[k]);
-		t0 = _mm_max_ps(t0, _mm_min_ps(ta, tb));
-		t1 = _mm_min_ps(t1, _mm_max_ps(ta, tb));
+		__m128 tnear = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + q->near[k]), q->o[k]), q->inv[k]);
+		__m128 tfar = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + q->far[k]), q->o[k]), q->inv[k]);
+		t0 = _mm_max_ps(t0, tnear);
+		t1 = _mm_min_ps(t1, tfar);
 	}
 	const __m128 absmask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff)), w = _mm_set1_ps(BOX_WIDEN);
 	t0 = _mm_sub_ps(t0, _mm_mul_ps(_mm_and_ps(t0, absmask), w));
@@ -253,11 +270,10 @@ static inline int node4_hit(const struct bvh4 *nd, const struct ray4 *q, float t
 	for (int c = 0; c < 4; c++) {
 		float t0 = tmin, t1 = tmax;
 		for (int k = 0; k < 3; k++) {
-			float ta = (nd->lo[k][c] - q->o[k]) * q->inv[k];
-			float tb = (nd->hi[k][c] - q->o[k]) * q->inv[k];
-			float lo = ta < tb ? ta : tb, hi = ta > tb ? ta : tb;
-			t0 = t0 > lo ? t0 : lo;
-			t1 = t1 < hi ? t1 : hi;
+			float tnear = (b[q->near[k] + (uint32_t)c] - q->o[k]) * q->inv[k];
+			float tfar = (b[q->far[k] + (uint32_t)c] - q->o[k]) * q->inv[k];
+			t0 = t0 > tnear ? t0 : tnear; /* _mm_max_ps(t0, tnear) */
+			t1 = t1 < tfar ? t1 : tfar;   /* _mm_min_ps(t1, tfar) */
 		}
 		t0 -= fabsf(t0) * BOX_WIDEN;
 		t1 += fabsf(t1) * BOX_WIDEN;
@@ -298,6 +314,8 @@ struct cand {
 
 static bool group_hit(const struct accel *A, const struct group *g, struct trace *r, struct hit *h, bool brute);
 static bool group_occluded(const struct accel *A, const struct group *g, struct trace *r);
+static void surface_complete(const struct scene *s, struct hit *h);
+static void surface_cb(const struct accel *a, struct hit *h);
 
 static inline bool sphere_test(const struct gsphere *sp, const struct trace *r, double *t)
 {
@@ -352,6 +370,7 @@ static bool inst_hit(const struct accel *A, const struct ginst *in, const struct
 	struct hit lh;
 	if (!group_hit(A, A->dgroup[A->s->objects[in->obj].u.instance.define], &lr, &lh, brute))
 		return false;
+	surface_complete(A->s, &lh); /* in the define's space */
 	h->t = lh.t;
 	h->n = v3_norm(m34_normal(&inv, lh.n));
 	h->ng = v3_norm(m34_normal(&inv, lh.ng));
@@ -492,21 +511,20 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 		const struct prim_sphere *ps = &s->objects[sp->obj].u.sphere;
 		vec3 q = v3_norm(v3_sub(p, sp->c));
 		h->n = h->ng = q;
+		h->mp = p;
+		h->u = h->v = 0;
 		if (ps->pole.x == 0 && ps->pole.y == 1 && ps->pole.z == 0 && ps->equator.x == 1 &&
 		    ps->equator.y == 0 && ps->equator.z == 0) {
-			/* the default frame: P = +y, E = +x, W = P x E = -z (as geom_surface) */
-			double phi = atan2(-q.z, q.x);
-			if (phi < 0)
-				phi += 2 * M_PI;
-			h->u = ps->radius * (phi >= 2 * M_PI ? 0 : phi);
-			h->v = ps->radius * (asin(q.y > 1 ? 1 : q.y < -1 ? -1 : q.y) + M_PI / 2);
+			/* the default frame: u, v from h->n later (surface_complete) */
+			h->surf_fn = surface_cb;
+			h->surf = NULL; /* a sphere (else the triangle's mesh) */
 		} else {
 			struct geom_obj go;
 			geom_obj_init(s, sp->obj, &go); /* sphere: no allocation */
 			geom_surface(&go, p, GEOM_PART_MAIN, &h->n, &h->u, &h->v);
 			h->ng = h->n;
+			h->surf_fn = NULL;
 		}
-		h->mp = p;
 		h->object = sp->obj;
 		h->material = s->objects[sp->obj].material;
 		break;
@@ -528,12 +546,13 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 					h->ng = v3_neg(h->ng);
 			}
 		}
-		vec3 oa = m->ov[ix[0]], ob = m->ov[ix[1]], oc = m->ov[ix[2]];
-		h->mp = v3_add(v3_add(v3_scale(oa, w0), v3_scale(ob, c->b1)), v3_scale(oc, c->b2));
-		if (m->ov == m->v) /* untransformed: geom_tri_uv's normal is fn, computed alike */
-			geom_tri_uv_n(oa, ob, fn, h->mp, &h->u, &h->v);
-		else
-			geom_tri_uv(oa, ob, oc, h->mp, &h->u, &h->v);
+		h->mp = v3(0, 0, 0);
+		h->u = h->v = 0;
+		h->surf_fn = surface_cb; /* mp, u, v later */
+		h->surf = m;
+		h->surf_idx = g->tri[i].tri;
+		h->surf_b1 = c->b1;
+		h->surf_b2 = c->b2;
 		h->object = m->obj;
 		h->material = s->objects[m->obj].material;
 		break;
@@ -541,6 +560,7 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 	case REF_XPRIM:
 		if (g->xp[i].g->kind == PRIM_CSG) {
 			*h = c->sub; /* CSG carries a finished hit */
+			h->surf_fn = NULL;
 		} else {
 			const struct geom_obj *go = g->xp[i].g;
 			vec3 lp = go->has_xform ? m34_point(&go->inv, p) : p;
@@ -552,15 +572,58 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 			h->mp = lp;
 			h->object = g->xp[i].obj;
 			h->material = s->objects[h->object].material;
+			h->surf_fn = NULL;
 		}
 		break;
 	default:
-		*h = c->sub;
+		*h = c->sub; /* instances complete their hit (inst_hit) */
+		h->surf_fn = NULL;
 		break;
 	}
 	h->t = c->t;
 	h->p = p;
 }
+
+/*
+ * The lazy part of finish(): u, v and mp of a sphere in the default frame
+ * (from the unit normal finish() stored) or of a triangle (from the
+ * barycentrics), in the group's space the hit was finished in, with
+ * exactly the arithmetic an eager finish() would use.
+ */
+static void surface_complete(const struct scene *s, struct hit *h)
+{
+	if (!h->surf_fn)
+		return;
+	if (!h->surf) { /* a sphere */
+		/* the default frame: P = +y, E = +x, W = P x E = -z (as geom_surface) */
+		const struct prim_sphere *ps = &s->objects[h->object].u.sphere;
+		vec3 q = h->n;
+		double phi = atan2(-q.z, q.x);
+		if (phi < 0)
+			phi += 2 * M_PI;
+		h->u = ps->radius * (phi >= 2 * M_PI ? 0 : phi);
+		h->v = ps->radius * (asin(q.y > 1 ? 1 : q.y < -1 ? -1 : q.y) + M_PI / 2);
+		h->mp = h->p;
+	} else {
+		const struct gmesh *m = h->surf;
+		const uint32_t *ix = tri_ix(m, h->surf_idx);
+		double b1 = h->surf_b1, b2 = h->surf_b2;
+		double w0 = 1 - b1 - b2;
+		vec3 oa = m->ov[ix[0]], ob = m->ov[ix[1]], oc = m->ov[ix[2]];
+		h->mp = v3_add(v3_add(v3_scale(oa, w0), v3_scale(ob, b1)), v3_scale(oc, b2));
+		if (m->ov == m->v) { /* untransformed: geom_tri_uv's normal is the face normal, computed alike */
+			vec3 a = m->v[ix[0]], b = m->v[ix[1]], cc = m->v[ix[2]];
+			vec3 fn = v3_norm(v3_cross(v3_sub(b, a), v3_sub(cc, a)));
+			geom_tri_uv_n(oa, ob, fn, h->mp, &h->u, &h->v);
+		} else {
+			geom_tri_uv(oa, ob, oc, h->mp, &h->u, &h->v);
+		}
+	}
+	h->surf_fn = NULL;
+}
+
+/* hit.surf_fn of a hit awaiting its u, v and mp (accel_hit_surface). */
+static void surface_cb(const struct accel *a, struct hit *h) { surface_complete(a->s, h); }
 
 /* Closest hit in group g; fills *h (group space) only on success. */
 static bool group_hit(const struct accel *A, const struct group *g, struct trace *r, struct hit *h, bool brute)

@@ -24,6 +24,8 @@ struct ray {
 	double tmin, tmax; /* hits accepted with tmin < t < tmax */
 };
 
+struct accel;
+
 struct hit {
 	double t;          /* ray parameter of the hit */
 	vec3 p;            /* world-space point */
@@ -31,11 +33,20 @@ struct hit {
 			      triangles); NOT flipped toward the ray */
 	vec3 ng;           /* world geometric normal, unit, same side as n */
 	vec3 mp;           /* the point in the object space of the object that owns the
-			      material (type I shaders: textures move with objects) */
+			      material (type I shaders: textures move with objects);
+			      only after accel_hit_surface */
 	double u, v;       /* surface mapping in object-space length units (type II
-			      shaders; docs/rendering.md gives each primitive's mapping) */
+			      shaders; docs/rendering.md gives each primitive's mapping);
+			      only after accel_hit_surface */
 	uint32_t material; /* resolved material index, SCENE_NONE = default material */
 	uint32_t object;   /* index of the leaf object hit (scene.objects) */
+	/* private to accel.c: how accel_hit_surface completes u, v and mp
+	 * (surf_fn == NULL: they are complete). A hit made by hand (a test's
+	 * mock accel) must set surf_fn = NULL if shading may ask for them. */
+	void (*surf_fn)(const struct accel *a, struct hit *h);
+	const void *surf;
+	uint32_t surf_idx;
+	double surf_b1, surf_b2;
 };
 
 struct accel;
@@ -57,8 +68,20 @@ void accel_get_stats(const struct accel *a, struct accel_stats *st);
  * returns false when nothing is bounded. */
 bool accel_bounds(const struct accel *a, vec3 *lo, vec3 *hi);
 
-/* Closest hit in (r->tmin, r->tmax); fills *h and returns true if any. Thread-safe. */
+/* Closest hit in (r->tmin, r->tmax); fills *h and returns true if any. Thread-safe.
+ * h->u, h->v and h->mp may be left 0 until accel_hit_surface(a, h): only
+ * shaders read them, and the sphere mapping (atan2, asin) costs as much as
+ * the rest of a primary ray. */
 bool accel_intersect(const struct accel *a, const struct ray *r, struct hit *h);
+/* Completes h->u, h->v and h->mp of a hit that accel_intersect or
+ * accel_intersect_brute returned with the same accel (the values are those
+ * an eager computation gives, bit for bit); does nothing when they are
+ * complete already, so calling it twice is harmless. Thread-safe. */
+static inline void accel_hit_surface(const struct accel *a, struct hit *h)
+{
+	if (h->surf_fn) /* inline, so shading links without accel.o (test mocks) */
+		h->surf_fn(a, h);
+}
 /* True if anything is hit in (r->tmin, r->tmax): early exit, for shadow rays. */
 bool accel_occluded(const struct accel *a, const struct ray *r);
 

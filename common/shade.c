@@ -176,6 +176,15 @@ static vec3 light_point(const struct shade_light *L, int k, int n, double r1, do
 	}
 }
 
+/* Completes h's u, v and mp (accel_hit_surface) when its material has a
+ * shader: only shaders read them, and a material without one is evaluated
+ * without looking at them (shader_eval). */
+static void need_surface(const struct shade_ctx *c, struct hit *h)
+{
+	if (h->material < c->s->n_materials && c->s->materials[h->material].shader.kind != SHADER_NONE)
+		accel_hit_surface(c->a, h);
+}
+
 /*
  * How much light passes from o to the point lp: (1,1,1) when nothing is in
  * the way, 0 when something opaque is; each transparent surface crossed
@@ -191,6 +200,7 @@ static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp)
 		struct hit h;
 		if (!accel_intersect(c->a, &r, &h))
 			return t;
+		need_surface(c, &h);
 		struct shader_point pt = { h.mp, h.u, h.v, h.n };
 		struct shader_mat m;
 		shader_eval(c->s, h.material, &pt, &m);
@@ -293,6 +303,7 @@ static vec3 trace(const struct shade_ctx *c, const struct ray *r, int depth, dou
 	bool entering = v3_dot(h.ng, d) < 0;
 	vec3 ng = entering ? h.ng : v3_neg(h.ng);
 	vec3 n0 = entering ? h.n : v3_neg(h.n);
+	need_surface(c, &h);
 	struct shader_point pt = { h.mp, h.u, h.v, n0 };
 	struct shader_mat m;
 	shader_eval(c->s, h.material, &pt, &m);

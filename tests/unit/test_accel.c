@@ -229,6 +229,8 @@ static void instanced_equals_inline(void)
 		}
 		if (!b1)
 			continue;
+		accel_hit_surface(ai, &h1);
+		accel_hit_surface(al, &h2);
 		hits++;
 		/* float inverses: positions agree to ~1e-7 of the coordinates */
 		if (!(fabs(h1.t - h2.t) * v3_len(d) <= 1e-6 * (1 + v3_len(h2.p))) || hb.t != h1.t) {
@@ -282,6 +284,7 @@ static void mp_owner(void)
 	struct ray r = { v3(11, 0, -5), v3(0, 0, 1), 0, INFINITY };
 	struct hit h;
 	CHECK(accel_intersect(a, &r, &h));
+	accel_hit_surface(a, &h);
 	CHECK_NEAR(h.t, 4, 1e-6);
 	CHECK(h.material == m && h.object == sp);
 	CHECK_NEAR(h.mp.x, 1, 1e-6); /* define space: the member's centre is at x = 1 */

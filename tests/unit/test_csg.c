@@ -362,6 +362,7 @@ static void instances_and_transforms(void)
 	struct ray r = { v3(5, 10, 0), NX, 0, INFINITY };
 	struct hit h;
 	CHECK(accel_intersect(acc, &r, &h));
+	accel_hit_surface(acc, &h);
 	CHECK_NEAR(h.mp.x, 1, EPS); /* world x 0.5 = define x 1 */
 	CHECK_NEAR(h.mp.y, 0, EPS);
 	CHECK(h.object == a);

@@ -41,8 +41,16 @@ static bool trace(const struct scene *s, vec3 o, vec3 d, struct hit *h)
 	bool brute = accel_intersect_brute(a, &r, &hb);
 	CHECK(hit == brute);
 	CHECK(hit == accel_occluded(a, &r));
-	if (hit && brute)
+	if (hit && brute) {
 		CHECK(h->t == hb.t && h->object == hb.object);
+		/* u, v, mp on demand, the same for both (and twice is harmless) */
+		accel_hit_surface(a, h);
+		accel_hit_surface(a, &hb);
+		struct hit h2 = *h;
+		accel_hit_surface(a, &h2);
+		CHECK(h->u == hb.u && h->v == hb.v && v3_len(v3_sub(h->mp, hb.mp)) == 0);
+		CHECK(h2.u == h->u && h2.v == h->v);
+	}
 	accel_free(a);
 	return hit;
 }
@@ -299,6 +307,7 @@ static void test_mesh_watertight(void)
 	struct ray r = { v3(0.75, 0.25, 2), v3(0, 0, -1), 0, INFINITY };
 	struct hit h;
 	CHECK(accel_intersect(a, &r, &h));
+	accel_hit_surface(a, &h);
 	CHECK_NEAR(h.t, 2, EPS);
 	CHECK(h.object == id);
 	CHECK_VEC(h.mp, v3(0.75, 0.25, 0));
