@@ -56,7 +56,7 @@ static void print_filters(const struct scene_camera *c)
  *   lights: N (P point, S shaped)
  *   objects: N (K kind, ...)
  *   primitives: S spheres, C cylinders, T triangles; L lights; M materials
- *   triangles: T (D drawn through instances)
+ *   triangles: T stored (D drawn, counting every instance)
  *   meshes: N
  *   definitions: N
  *   instances: N
@@ -94,7 +94,7 @@ int master_check(const struct master_opts *o)
 	printf("primitives: %u spheres, %u cylinders, %llu triangles; %u lights; %u materials\n",
 	       st.by_kind[PRIM_SPHERE], st.by_kind[PRIM_CYLINDER], (unsigned long long)st.triangles, s->n_lights,
 	       s->n_materials);
-	printf("triangles: %llu (%llu drawn through instances)\n", (unsigned long long)st.triangles,
+	printf("triangles: %llu stored, %llu drawn (every instance counted)\n", (unsigned long long)st.triangles,
 	       (unsigned long long)st.triangles_instanced);
 	printf("meshes: %u\n", s->n_meshes);
 	printf("definitions: %u\n", s->n_defines);
