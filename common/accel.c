@@ -208,9 +208,7 @@ static inline double pow2(int e)
 
 static inline void ray4_init(struct ray4 *q, const struct trace *r, vec3 center)
 {
-	double o[3] = { r->o.x - center.x, r->o.y - center.y, r->o.z - center.z };
-	double d[3] = { r->d.x, r->d.y, r->d.z };
-	double ax = fabs(d[0]), ay = fabs(d[1]), az = fabs(d[2]);
+	double ax = fabs(r->d.x), ay = fabs(r->d.y), az = fabs(r->d.z);
 	double m = ax > ay ? ax : ay;
 	m = m > az ? m : az;
 	uint64_t bits;
@@ -220,12 +218,14 @@ static inline void ray4_init(struct ray4 *q, const struct trace *r, vec3 center)
 		e = 0; /* absurd scales: left unscaled (the +-1e30 rule still holds) */
 	double s = pow2(-e);
 	q->tscale = pow2(e);
-	for (int k = 0; k < 3; k++) {
+	double o[3] = { r->o.x - center.x, r->o.y - center.y, r->o.z - center.z };
+	double d[3] = { r->d.x, r->d.y, r->d.z };
+	for (uint32_t k = 0; k < 3; k++) {
 		double dk = d[k] * s;
 		float iv = (float)(fabs(dk) > 1e-30 ? 1.0 / dk : copysign(1e30, dk));
-		uint32_t lo = (uint32_t)(4 * k), hi = (uint32_t)(12 + 4 * k); /* rows of bvh4 lo[k], hi[k] */
-		q->near[k] = signbit(iv) ? hi : lo;
-		q->far[k] = signbit(iv) ? lo : hi;
+		uint32_t sk = signbit(iv) ? 1 : 0; /* rows of bvh4: lo[k] at 4k, hi[k] at 12 + 4k */
+		q->near[k] = 4 * k + 12 * sk;
+		q->far[k] = 4 * k + 12 * (1 - sk);
 #if defined(__SSE2__)
 		q->o[k] = _mm_set1_ps((float)o[k]);
 		q->inv[k] = _mm_set1_ps(iv);
@@ -249,11 +249,19 @@ static inline void ray4_init(struct ray4 *q, const struct trace *r, vec3 center)
  * bounds (unused slots) never hit: max returns its second operand when one
  * is NaN, as SSE's does, so t0 becomes NaN and t0 <= t1 fails.
  */
-static inline int node4_hit(const struct bvh4 *nd, const struct ray4 *q, float tmin, float tmax, float tn[4])
+#if defined(__SSE2__)
+typedef __m128 tspan; /* tmin or tmax broadcast to the four lanes */
+static inline tspan tspan_of(float t) { return _mm_set1_ps(t); }
+#else
+typedef float tspan;
+static inline tspan tspan_of(float t) { return t; }
+#endif
+
+static inline int node4_hit(const struct bvh4 *nd, const struct ray4 *q, tspan tmin, tspan tmax, float tn[4])
 {
 	const float *b = (const float *)(const void *)nd; /* lo[3][4] then hi[3][4] */
 #if defined(__SSE2__)
-	__m128 t0 = _mm_set1_ps(tmin), t1 = _mm_set1_ps(tmax);
+	__m128 t0 = tmin, t1 = tmax;
 	for (int k = 0; k < 3; k++) {
 		__m128 tnear = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + q->near[k]), q->o[k]), q->inv[k]);
 		__m128 tfar = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + q->far[k]), q->o[k]), q->inv[k]);
@@ -625,10 +633,11 @@ static void surface_complete(const struct scene *s, struct hit *h)
 /* hit.surf_fn of a hit awaiting its u, v and mp (accel_hit_surface). */
 static void surface_cb(const struct accel *a, struct hit *h) { surface_complete(a->s, h); }
 
-/* Closest hit in group g; fills *h (group space) only on success. */
-static bool group_hit(const struct accel *A, const struct group *g, struct trace *r, struct hit *h, bool brute)
+/* The unbounded references of g (planes and the like), tested for every
+ * ray. Same contract as ref_test. */
+static __attribute__((noinline)) bool unb_hit(const struct accel *A, const struct group *g, struct trace *r,
+					      struct cand *best, bool brute)
 {
-	struct cand best;
 	bool found = false;
 	for (uint32_t k = 0; k < g->n_unb; k++) {
 		uint32_t ref = g->unb[k];
@@ -636,120 +645,149 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 		if (go && go->kind == PRIM_PLANE && !go->has_xform) { /* geom_intersect's plane test, inline */
 			double t;
 			if (geom_plane_t(go->u.pl.pos, go->u.pl.n, r->o, r->d, &t) && t > r->tmin && t < r->tmax) {
-				best.ref = ref;
-				best.t = r->tmax = t;
-				best.part = GEOM_PART_MAIN;
+				best->ref = ref;
+				best->t = r->tmax = t;
+				best->part = GEOM_PART_MAIN;
 				found = true;
 			}
 			continue;
 		}
-		found |= ref_test(A, g, ref, r, &best, brute);
+		found |= ref_test(A, g, ref, r, best, brute);
 	}
-	if (brute) { /* every primitive, kind by kind, without the tree */
-		for (uint32_t k = 0; k < g->n_sph; k++) {
-			double t;
-			if (sphere_test(&g->sph[k], r, &t)) {
-				best.ref = REF_MAKE(REF_SPHERE, k);
-				best.t = r->tmax = t;
+	return found;
+}
+
+/* Every bounded primitive of g, kind by kind, without the tree (the
+ * reference for tests). Same contract as ref_test. */
+static __attribute__((noinline)) bool brute_hit(const struct accel *A, const struct group *g, struct trace *r,
+						struct cand *best)
+{
+	bool found = false;
+	for (uint32_t k = 0; k < g->n_sph; k++) {
+		double t;
+		if (sphere_test(&g->sph[k], r, &t)) {
+			best->ref = REF_MAKE(REF_SPHERE, k);
+			best->t = r->tmax = t;
+			found = true;
+		}
+	}
+	for (uint32_t k = 0; k < g->n_tri;) { /* a mesh's triangles are consecutive */
+		const struct gmesh *m = &g->mesh[g->tri[k].mesh];
+		uint32_t mi = g->tri[k].mesh;
+		for (; k < g->n_tri && g->tri[k].mesh == mi; k++) {
+			const uint32_t *ix = tri_ix(m, g->tri[k].tri);
+			double t, b1, b2;
+			if (geom_tri_hit(trace_wray(r), m->v[ix[0]], m->v[ix[1]], m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2)) {
+				best->ref = REF_MAKE(REF_TRI, k);
+				best->t = r->tmax = t;
+				best->b1 = b1;
+				best->b2 = b2;
 				found = true;
 			}
 		}
-		for (uint32_t k = 0; k < g->n_tri;) { /* a mesh's triangles are consecutive */
-			const struct gmesh *m = &g->mesh[g->tri[k].mesh];
-			uint32_t mi = g->tri[k].mesh;
-			for (; k < g->n_tri && g->tri[k].mesh == mi; k++) {
-				const uint32_t *ix = tri_ix(m, g->tri[k].tri);
-				double t, b1, b2;
-				if (geom_tri_hit(trace_wray(r), m->v[ix[0]], m->v[ix[1]], m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2)) {
-					best.ref = REF_MAKE(REF_TRI, k);
-					best.t = r->tmax = t;
-					best.b1 = b1;
-					best.b2 = b2;
-					found = true;
+	}
+	for (uint32_t k = 0; k < g->n_refs; k++)
+		if (REF_KIND(group_ref(g, k)) >= REF_XPRIM)
+			found |= ref_test(A, g, group_ref(g, k), r, best, true);
+	return found;
+}
+
+/* The BVH traversal of g's bounded references: nearest child first,
+ * subtrees behind the closest hit so far popped and dropped. Same contract
+ * as ref_test. */
+static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A, const struct group *g,
+							   struct trace *r, struct cand *best)
+{
+	bool found = false;
+	const struct bvh4 *nodes = g->bvh.nodes;
+	struct ray4 q;
+	ray4_init(&q, r, g->center);
+	const tspan tmin = tspan_of((float)(r->tmin * q.tscale));
+	float tmax = (float)(r->tmax * q.tscale);
+	tspan tmax4 = tspan_of(tmax);
+	struct {
+		uint32_t idx, n;
+		float t;
+	} stack[3 * BVH_MAX_DEPTH + 4];
+	int sp = 0;
+	uint32_t idx = 0, n = 0;
+	for (;;) {
+		if (n) {
+			for (uint32_t k = 0; k < n; k++)
+				found |= ref_test(A, g, group_ref(g, idx + k), r, best, false);
+			tmax = (float)(r->tmax * q.tscale);
+			tmax4 = tspan_of(tmax);
+		} else {
+			const struct bvh4 *nd = &nodes[idx];
+			float tn[4];
+			int m = node4_hit(nd, &q, tmin, tmax4, tn);
+			if (m && !(m & (m - 1))) { /* one child */
+				int c = __builtin_ctz((unsigned)m);
+				idx = nd->idx[c];
+				n = nd->n[c];
+				continue;
+			}
+			int m2 = m & (m - 1); /* m without its lowest child */
+			if (m2 && !(m2 & (m2 - 1))) { /* two children */
+				int c0 = __builtin_ctz((unsigned)m), c1 = __builtin_ctz((unsigned)m2);
+				if (tn[c0] > tn[c1]) { /* the nearer first; ties keep slot order */
+					int tc = c0;
+					c0 = c1, c1 = tc;
 				}
+				stack[sp].idx = nd->idx[c1];
+				stack[sp].n = nd->n[c1];
+				stack[sp++].t = tn[c1];
+				idx = nd->idx[c0];
+				n = nd->n[c0];
+				continue;
+			}
+			if (m) { /* nearest first; the others pushed farthest first */
+				int cs[4], k = 0;
+				for (int c = 0; c < 4; c++) {
+					if (!(m >> c & 1))
+						continue;
+					int j = k++;
+					for (; j > 0 && tn[cs[j - 1]] > tn[c]; j--)
+						cs[j] = cs[j - 1];
+					cs[j] = c;
+				}
+				for (int j = k - 1; j >= 1; j--) {
+					stack[sp].idx = nd->idx[cs[j]];
+					stack[sp].n = nd->n[cs[j]];
+					stack[sp++].t = tn[cs[j]];
+				}
+				idx = nd->idx[cs[0]];
+				n = nd->n[cs[0]];
+				continue;
 			}
 		}
-		for (uint32_t k = 0; k < g->n_refs; k++)
-			if (REF_KIND(group_ref(g, k)) >= REF_XPRIM)
-				found |= ref_test(A, g, group_ref(g, k), r, &best, true);
+		/* pop the next subtree still in front of the closest hit */
+		for (;;) {
+			if (sp == 0)
+				return found;
+			sp--;
+			if (stack[sp].t <= tmax)
+				break;
+		}
+		idx = stack[sp].idx;
+		n = stack[sp].n;
+	}
+}
+
+/* Closest hit in group g; fills *h (group space) only on success. */
+static bool group_hit(const struct accel *A, const struct group *g, struct trace *r, struct hit *h, bool brute)
+{
+	struct cand best;
+	bool found = g->n_unb ? unb_hit(A, g, r, &best, brute) : false;
+	if (brute) {
+		found |= brute_hit(A, g, r, &best);
 	} else if (g->bvh.root_n) { /* the root is one leaf */
 		if (box_hit(g->bvh.root_b, g->center, r))
 			for (uint32_t k = 0; k < g->bvh.root_n; k++)
 				found |= ref_test(A, g, group_ref(g, g->bvh.root_idx + k), r, &best, false);
 	} else if (g->bvh.n_nodes4) {
-		const struct bvh4 *nodes = g->bvh.nodes;
-		struct ray4 q;
-		ray4_init(&q, r, g->center);
-		const float tmin = (float)(r->tmin * q.tscale);
-		float tmax = (float)(r->tmax * q.tscale);
-		struct {
-			uint32_t idx, n;
-			float t;
-		} stack[3 * BVH_MAX_DEPTH + 4];
-		int sp = 0;
-		uint32_t idx = 0, n = 0;
-		for (;;) {
-			if (n) {
-				for (uint32_t k = 0; k < n; k++)
-					found |= ref_test(A, g, group_ref(g, idx + k), r, &best, false);
-				tmax = (float)(r->tmax * q.tscale);
-			} else {
-				const struct bvh4 *nd = &nodes[idx];
-				float tn[4];
-				int m = node4_hit(nd, &q, tmin, tmax, tn);
-				if (m && !(m & (m - 1))) { /* one child */
-					int c = __builtin_ctz((unsigned)m);
-					idx = nd->idx[c];
-					n = nd->n[c];
-					continue;
-				}
-				int m2 = m & (m - 1); /* m without its lowest child */
-				if (m2 && !(m2 & (m2 - 1))) { /* two children */
-					int c0 = __builtin_ctz((unsigned)m), c1 = __builtin_ctz((unsigned)m2);
-					if (tn[c0] > tn[c1]) { /* the nearer first; ties keep slot order */
-						int tc = c0;
-						c0 = c1, c1 = tc;
-					}
-					stack[sp].idx = nd->idx[c1];
-					stack[sp].n = nd->n[c1];
-					stack[sp++].t = tn[c1];
-					idx = nd->idx[c0];
-					n = nd->n[c0];
-					continue;
-				}
-				if (m) { /* nearest first; the others pushed farthest first */
-					int cs[4], k = 0;
-					for (int c = 0; c < 4; c++) {
-						if (!(m >> c & 1))
-							continue;
-						int j = k++;
-						for (; j > 0 && tn[cs[j - 1]] > tn[c]; j--)
-							cs[j] = cs[j - 1];
-						cs[j] = c;
-					}
-					for (int j = k - 1; j >= 1; j--) {
-						stack[sp].idx = nd->idx[cs[j]];
-						stack[sp].n = nd->n[cs[j]];
-						stack[sp++].t = tn[cs[j]];
-					}
-					idx = nd->idx[cs[0]];
-					n = nd->n[cs[0]];
-					continue;
-				}
-			}
-			/* pop the next subtree still in front of the closest hit */
-			for (;;) {
-				if (sp == 0)
-					goto done;
-				sp--;
-				if (stack[sp].t <= tmax)
-					break;
-			}
-			idx = stack[sp].idx;
-			n = stack[sp].n;
-		}
+		found |= bvh_hit(A, g, r, &best);
 	}
-done:
 	if (found)
 		finish(A, g, r, &best, h);
 	return found;
@@ -772,7 +810,7 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 	const struct bvh4 *nodes = g->bvh.nodes;
 	struct ray4 q;
 	ray4_init(&q, r, g->center);
-	const float tmin = (float)(r->tmin * q.tscale), tmax = (float)(r->tmax * q.tscale);
+	const tspan tmin = tspan_of((float)(r->tmin * q.tscale)), tmax = tspan_of((float)(r->tmax * q.tscale));
 	struct {
 		uint32_t idx, n;
 	} stack[3 * BVH_MAX_DEPTH + 4];
