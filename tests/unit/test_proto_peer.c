@@ -26,6 +26,17 @@
 #include "proto/serial.h"
 #include "scene_fixture.h"
 
+#if defined(__SANITIZE_ADDRESS__)
+#define RSS_BOUND_KIB (40 * 1024)
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define RSS_BOUND_KIB (40 * 1024)
+#endif
+#endif
+#ifndef RSS_BOUND_KIB
+#define RSS_BOUND_KIB (20 * 1024) /* a worker with back-pressure stays well below */
+#endif
+
 static char port[16];
 
 static struct proto_conn *dial(void)
@@ -431,8 +442,11 @@ static void test_back_pressure(pid_t pid)
 		rss1 = rss_kib(pid);
 		stable = rss1 == prev ? stable + 1 : 0;
 	}
-	CHECK(rss0 > 0 && rss1 > 0 && rss1 - rss0 < 20 * 1024);
-	if (rss1 - rss0 >= 20 * 1024)
+	/* AddressSanitizer's quarantine keeps freed blocks resident, so under it
+	 * RSS measures allocations, not live bytes: the bound is loosened there
+	 * (the worker without back-pressure grows by 44 MiB even without ASan). */
+	CHECK(rss0 > 0 && rss1 > 0 && rss1 - rss0 < RSS_BOUND_KIB);
+	if (rss1 - rss0 >= RSS_BOUND_KIB)
 		fprintf(stderr, "worker grew by %ld KiB with a master that does not read\n", rss1 - rss0);
 	/* now read: every tile arrives, with the right checksum */
 	uint32_t got = 0, good = 0;
