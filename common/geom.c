@@ -718,6 +718,7 @@ void geom_wray_init(struct geom_wray *w, vec3 o, vec3 d)
 		kx = ky, ky = tmp;
 	}
 	w->kx = kx, w->ky = ky, w->kz = kz;
+	w->ox = w->o[kx], w->oy = w->o[ky], w->oz = w->o[kz];
 	double inv = dd[kz] != 0 ? 1.0 / dd[kz] : 0;
 	w->sx = dd[kx] * inv;
 	w->sy = dd[ky] * inv;

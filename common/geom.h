@@ -130,6 +130,7 @@ struct geom_wray {
 	double o[3];
 	int kx, ky, kz;
 	double sx, sy, sz;
+	double ox, oy, oz; /* o[kx], o[ky], o[kz] */
 };
 
 void geom_wray_init(struct geom_wray *w, vec3 o, vec3 d);
@@ -143,12 +144,15 @@ void geom_wray_init(struct geom_wray *w, vec3 o, vec3 d);
 static inline bool geom_tri_hit(const struct geom_wray *w, vec3 a, vec3 b, vec3 c, double tmin,
 				double tmax, double *t, double *b1, double *b2)
 {
-	double A[3] = { a.x - w->o[0], a.y - w->o[1], a.z - w->o[2] };
-	double B[3] = { b.x - w->o[0], b.y - w->o[1], b.z - w->o[2] };
-	double C[3] = { c.x - w->o[0], c.y - w->o[1], c.z - w->o[2] };
-	double ax = A[w->kx] - w->sx * A[w->kz], ay = A[w->ky] - w->sy * A[w->kz];
-	double bx = B[w->kx] - w->sx * B[w->kz], by = B[w->ky] - w->sy * B[w->kz];
-	double cx = C[w->kx] - w->sx * C[w->kz], cy = C[w->ky] - w->sy * C[w->kz];
+	/* vertices relative to the origin, permuted (only the components used) */
+	const int kx = w->kx, ky = w->ky, kz = w->kz;
+	double va[3] = { a.x, a.y, a.z }, vb[3] = { b.x, b.y, b.z }, vc[3] = { c.x, c.y, c.z };
+	double Ax = va[kx] - w->ox, Ay = va[ky] - w->oy, Az = va[kz] - w->oz;
+	double Bx = vb[kx] - w->ox, By = vb[ky] - w->oy, Bz = vb[kz] - w->oz;
+	double Cx = vc[kx] - w->ox, Cy = vc[ky] - w->oy, Cz = vc[kz] - w->oz;
+	double ax = Ax - w->sx * Az, ay = Ay - w->sy * Az;
+	double bx = Bx - w->sx * Bz, by = By - w->sy * Bz;
+	double cx = Cx - w->sx * Cz, cy = Cy - w->sy * Cz;
 	double U = cx * by - cy * bx;
 	double V = ax * cy - ay * cx;
 	double W = bx * ay - by * ax;
@@ -157,7 +161,7 @@ static inline bool geom_tri_hit(const struct geom_wray *w, vec3 a, vec3 b, vec3 
 	double det = U + V + W;
 	if (det == 0)
 		return false;
-	double T = U * (w->sz * A[w->kz]) + V * (w->sz * B[w->kz]) + W * (w->sz * C[w->kz]);
+	double T = U * (w->sz * Az) + V * (w->sz * Bz) + W * (w->sz * Cz);
 	double tt = T / det;
 	if (!(tt > tmin && tt < tmax))
 		return false;
