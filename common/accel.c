@@ -188,14 +188,21 @@ struct ray4 {
 #else
 	float o[3], inv[3];
 #endif
-	/* per axis, the float offset in a bvh4 of the near plane's row (lo[k]
-	 * for a positive direction, hi[k] for a negative one) and of the far
-	 * plane's: the "sign" trick, no min/max between the two planes */
-	uint32_t near[3], far[3];
+	/* the direction's octant: bit k set when d[k] is negative (its sign
+	 * bit, -0 included: the sign of inv[k]); picks the near plane of each
+	 * axis (hi[k] for a negative direction, lo[k] else), the "sign" trick */
+	uint32_t oct;
 	double tscale; /* box-space t = ray t * tscale */
 };
 
 _Static_assert(offsetof(struct bvh4, hi) == 12 * sizeof(float), "bvh4 rows: lo[3][4] then hi[3][4]");
+
+/* Bit k set when direction component k has its sign bit set (-0 too):
+ * the sign of 1 / (d[k] * s) or of copysign(1e30, d[k]) alike. */
+static inline uint32_t ray_octant(vec3 d)
+{
+	return (signbit(d.x) ? 1u : 0u) | (signbit(d.y) ? 2u : 0u) | (signbit(d.z) ? 4u : 0u);
+}
 
 /* 2^e for an integer e in [-1022, 1023], exactly. */
 static inline double pow2(int e)
@@ -218,14 +225,12 @@ static inline void ray4_init(struct ray4 *q, const struct trace *r, vec3 center)
 		e = 0; /* absurd scales: left unscaled (the +-1e30 rule still holds) */
 	double s = pow2(-e);
 	q->tscale = pow2(e);
+	q->oct = ray_octant(r->d);
 	double o[3] = { r->o.x - center.x, r->o.y - center.y, r->o.z - center.z };
 	double d[3] = { r->d.x, r->d.y, r->d.z };
 	for (uint32_t k = 0; k < 3; k++) {
 		double dk = d[k] * s;
 		float iv = (float)(fabs(dk) > 1e-30 ? 1.0 / dk : copysign(1e30, dk));
-		uint32_t sk = signbit(iv) ? 1 : 0; /* rows of bvh4: lo[k] at 4k, hi[k] at 12 + 4k */
-		q->near[k] = 4 * k + 12 * sk;
-		q->far[k] = 4 * k + 12 * (1 - sk);
 #if defined(__SSE2__)
 		q->o[k] = _mm_set1_ps((float)o[k]);
 		q->inv[k] = _mm_set1_ps(iv);
@@ -257,14 +262,18 @@ typedef float tspan;
 static inline tspan tspan_of(float t) { return t; }
 #endif
 
-static inline int node4_hit(const struct bvh4 *nd, const struct ray4 *q, tspan tmin, tspan tmax, float tn[4])
+static inline __attribute__((always_inline)) int node4_hit(const struct bvh4 *nd, const struct ray4 *q,
+							    uint32_t oct, tspan tmin, tspan tmax, float tn[4])
 {
 	const float *b = (const float *)(const void *)nd; /* lo[3][4] then hi[3][4] */
+	/* rows of bvh4: lo[k] at 4k, hi[k] at 12 + 4k */
+	const uint32_t near[3] = { 12 * (oct & 1), 4 + 12 * (oct >> 1 & 1), 8 + 12 * (oct >> 2 & 1) };
+	const uint32_t far[3] = { 12 * (~oct & 1), 4 + 12 * (~oct >> 1 & 1), 8 + 12 * (~oct >> 2 & 1) };
 #if defined(__SSE2__)
 	__m128 t0 = tmin, t1 = tmax;
 	for (int k = 0; k < 3; k++) {
-		__m128 tnear = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + q->near[k]), q->o[k]), q->inv[k]);
-		__m128 tfar = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + q->far[k]), q->o[k]), q->inv[k]);
+		__m128 tnear = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + near[k]), q->o[k]), q->inv[k]);
+		__m128 tfar = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + far[k]), q->o[k]), q->inv[k]);
 		t0 = _mm_max_ps(t0, tnear);
 		t1 = _mm_min_ps(t1, tfar);
 	}
@@ -278,8 +287,8 @@ static inline int node4_hit(const struct bvh4 *nd, const struct ray4 *q, tspan t
 	for (int c = 0; c < 4; c++) {
 		float t0 = tmin, t1 = tmax;
 		for (int k = 0; k < 3; k++) {
-			float tnear = (b[q->near[k] + (uint32_t)c] - q->o[k]) * q->inv[k];
-			float tfar = (b[q->far[k] + (uint32_t)c] - q->o[k]) * q->inv[k];
+			float tnear = (b[near[k] + (uint32_t)c] - q->o[k]) * q->inv[k];
+			float tfar = (b[far[k] + (uint32_t)c] - q->o[k]) * q->inv[k];
 			t0 = t0 > tnear ? t0 : tnear; /* _mm_max_ps(t0, tnear) */
 			t1 = t1 < tfar ? t1 : tfar;   /* _mm_min_ps(t1, tfar) */
 		}
@@ -696,7 +705,7 @@ static __attribute__((noinline)) bool brute_hit(const struct accel *A, const str
  * subtrees behind the closest hit so far popped and dropped. Same contract
  * as ref_test. */
 static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A, const struct group *g,
-							   struct trace *r, struct cand *best)
+							   struct trace *r, struct cand *best, const uint32_t oct)
 {
 	bool found = false;
 	const struct bvh4 *nodes = g->bvh.nodes;
@@ -720,7 +729,7 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 		} else {
 			const struct bvh4 *nd = &nodes[idx];
 			float tn[4];
-			int m = node4_hit(nd, &q, tmin, tmax4, tn);
+			int m = node4_hit(nd, &q, oct, tmin, tmax4, tn);
 			if (m && !(m & (m - 1))) { /* one child */
 				int c = __builtin_ctz((unsigned)m);
 				idx = nd->idx[c];
@@ -786,7 +795,16 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 			for (uint32_t k = 0; k < g->bvh.root_n; k++)
 				found |= ref_test(A, g, group_ref(g, g->bvh.root_idx + k), r, &best, false);
 	} else if (g->bvh.n_nodes4) {
-		found |= bvh_hit(A, g, r, &best);
+		switch (ray_octant(r->d)) { /* one copy of the loop per octant: near planes at fixed offsets */
+		case 0: found |= bvh_hit(A, g, r, &best, 0); break;
+		case 1: found |= bvh_hit(A, g, r, &best, 1); break;
+		case 2: found |= bvh_hit(A, g, r, &best, 2); break;
+		case 3: found |= bvh_hit(A, g, r, &best, 3); break;
+		case 4: found |= bvh_hit(A, g, r, &best, 4); break;
+		case 5: found |= bvh_hit(A, g, r, &best, 5); break;
+		case 6: found |= bvh_hit(A, g, r, &best, 6); break;
+		default: found |= bvh_hit(A, g, r, &best, 7); break;
+		}
 	}
 	if (found)
 		finish(A, g, r, &best, h);
@@ -824,7 +842,7 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 		} else {
 			const struct bvh4 *nd = &nodes[idx];
 			float tn[4];
-			int m = node4_hit(nd, &q, tmin, tmax, tn);
+			int m = node4_hit(nd, &q, q.oct, tmin, tmax, tn);
 			if (m) {
 				int c = __builtin_ctz((unsigned)m);
 				for (int j = 3; j > c; j--) {
