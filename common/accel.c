@@ -27,7 +27,12 @@
  * accel_occluded. Instances recurse into their define's group (depth
  * bounded by LIM_DEFINE_DEPTH); the closest hit is completed (normal, uv,
  * mp, material) once per group, in the group's space, then carried out
- * through each instance's transform.
+ * through each instance's transform. In the root group, u, v and mp of
+ * untransformed spheres (default pole and equator) and of triangles are
+ * left to accel_hit_surface (hit.surf_fn), which the shader calls only for
+ * materials with a shader; inside instances they are completed at once.
+ * The traversal loop exists once per ray octant (bvh_hit's oct), so the
+ * node test reads each axis' near and far planes at constant offsets.
  *
  * Rays are never normalised when they change space, so t is the same in
  * every space and a hit's t is the caller's t.
