@@ -15,9 +15,19 @@
  * A worker that disconnects, goes silent past the heartbeat deadline, breaks
  * the protocol or returns an invalid tile loses its tiles back to the queue.
  * Connection failures are retried with back-off (a few times); protocol or
- * tile faults, version, build or secret mismatches drop the worker for good.
- * Every pixel comes either from the local renderer or from a checked result
- * of the same renderer on a worker, so the image equals a local render.
+ * tile faults, version, build or secret mismatches drop the worker for good,
+ * and so does a worker holding tiles that returns none for far longer than
+ * its usual tile time (a hung tracer).
+ *
+ * Audits: a checksum catches corruption, not a worker that computes wrong
+ * pixels. The master re-renders a sample of each worker's tiles itself (the
+ * first FARM_AUDIT_PROBATION it delivers, then a fraction chosen by a salted
+ * hash of tile and worker) on its local threads, which serve audits before
+ * ordinary tiles. An audited tile is held back as a claim until the local
+ * render of it is done, and the local pixels are the ones stored. A mismatch
+ * distrusts the worker for the rest of the render: every tile it delivered
+ * goes back to the queue, and it is dropped. So every pixel of the image
+ * comes from the local renderer or from a worker never caught lying.
  */
 #include "master/farm.h"
 
@@ -46,6 +56,18 @@
 #define FARM_DEPTH_MAX 64
 /* a line of a workers file */
 #define FARM_LINE_MAX 512
+/* tiles each worker delivers that are all audited before sampling takes over:
+ * a broken build or bad RAM shows early, and a worker that lies from its
+ * second tile on is caught for sure */
+#define FARM_AUDIT_PROBATION 4
+/* tile latencies kept per worker for its median (the hung-tile deadline) */
+#define FARM_LAT_KEEP 31
+/* hung-tile deadline: this many median tile latencies ... */
+#define FARM_HANG_MEDIANS 10.0
+/* ... but never less than this many heartbeat timeouts */
+#define FARM_HANG_HB 3.0
+/* before a worker's first result (no median yet): this many heartbeat timeouts */
+#define FARM_HANG_HB_FIRST 10.0
 
 /* ---- the scheduler: shared by the event loop and local threads ---- */
 
@@ -56,8 +78,20 @@ struct ftile {
 	struct tile_rect rect;
 	uint8_t done;
 	uint8_t queued;        /* in the pending queue */
+	uint8_t audit_queued;  /* in the audit queue */
 	uint16_t holder[2];    /* who traces it now (HOLDER_NONE = free slot) */
+	uint16_t by;           /* who wrote the stored pixels (when done) */
+	uint16_t claim_by;     /* who delivered claim */
+	uint8_t *claim;        /* a worker's pixels awaiting their audit (owned), or NULL */
 	double sent;           /* when first handed out (for "oldest outstanding") */
+};
+
+/* what the scheduler knows of a worker's honesty (locked) */
+struct trust {
+	uint8_t caught;        /* an audit failed: nothing more from it is used */
+	uint8_t reported;      /* the event loop has dropped it and said so */
+	uint32_t tile;         /* the tile whose audit failed */
+	uint32_t requeued;     /* its tiles sent back to the queue */
 };
 
 struct sched {
@@ -68,6 +102,11 @@ struct sched {
 	uint32_t *queue;       /* pending tile ids: ring buffer of n entries */
 	uint32_t q_head, q_len;
 	uint32_t redispatched, duplicates, dup_wasted;
+	uint32_t *audits;      /* tile ids with a claim to re-render: ring buffer of n */
+	uint32_t a_head, a_len;
+	uint32_t n_audits, n_audit_failed;
+	struct trust *trust;   /* per worker */
+	uint32_t n_workers;
 	uint8_t *image;
 	uint32_t w, h;
 	atomic_int stop;       /* finished or cancelled: local threads give up */
@@ -129,7 +168,7 @@ static uint32_t sched_take_locked(struct sched *s, uint16_t who, bool dup_ok, do
 	uint32_t best = UINT32_MAX;
 	for (uint32_t i = 0; i < s->n; i++) {
 		struct ftile *t = &s->t[i];
-		if (t->done || holder_count(t) != 1 || holds(t, who))
+		if (t->done || t->claim || holder_count(t) != 1 || holds(t, who))
 			continue;
 		if (best == UINT32_MAX || t->sent < s->t[best].sent)
 			best = i;
@@ -141,12 +180,12 @@ static uint32_t sched_take_locked(struct sched *s, uint16_t who, bool dup_ok, do
 	return best;
 }
 
-/* Gives up `who`'s hold on tile id; back to the queue when nobody holds it. Locked. */
-static void sched_release_locked(struct sched *s, uint32_t id, uint16_t who)
+/* Puts tile id back at the front of the queue when it is not done, has no
+ * holder, no claim awaiting audit and is not queued already. Locked. */
+static void sched_requeue_locked(struct sched *s, uint32_t id)
 {
 	struct ftile *t = &s->t[id];
-	holder_del(t, who);
-	if (!t->done && holder_count(t) == 0 && !t->queued) {
+	if (!t->done && holder_count(t) == 0 && !t->claim && !t->queued) {
 		/* lost tiles go to the front: they are the oldest work */
 		s->q_head = (s->q_head + s->n - 1) % s->n;
 		s->queue[s->q_head] = id;
@@ -156,27 +195,146 @@ static void sched_release_locked(struct sched *s, uint32_t id, uint16_t who)
 	}
 }
 
-/* Stores a finished tile unless someone was first; returns true if it was used. Locked. */
-static bool sched_finish_locked(struct sched *s, uint32_t id, uint16_t who, const uint8_t *rgb)
+/* Gives up `who`'s hold on tile id; back to the queue when nobody holds it. Locked. */
+static void sched_release_locked(struct sched *s, uint32_t id, uint16_t who)
+{
+	holder_del(&s->t[id], who);
+	sched_requeue_locked(s, id);
+}
+
+/* Copies rgb into the image as tile id, written by `who`; marks it done and
+ * ends the render when it was the last. Locked. */
+static void sched_store_locked(struct sched *s, uint32_t id, uint16_t who, const uint8_t *rgb)
 {
 	struct ftile *t = &s->t[id];
-	holder_del(t, who);
-	if (t->done) {
-		s->dup_wasted++;
-		return false;
-	}
 	const struct tile_rect *r = &t->rect;
 	for (uint32_t y = 0; y < r->h; y++)
 		memcpy(s->image + (((size_t)(r->y + y) * s->w) + r->x) * 3, rgb + (size_t)y * r->w * 3,
 		       (size_t)r->w * 3);
 	t->done = 1;
+	t->by = who;
 	s->n_done++;
 	if (s->n_done == s->n) {
 		atomic_store(&s->stop, 1);
 		pthread_cond_broadcast(&s->cv);
 		sched_wake(s);
 	}
+}
+
+/*
+ * Worker `who` failed the audit of tile `tile`: from now on nothing it sends
+ * is used, and every tile it delivered in this render goes back to the queue
+ * (stored ones are undone, claims still awaiting their audit are discarded).
+ * The event loop drops its connection and reports it (trust[].reported).
+ * Locked.
+ */
+static void sched_distrust_locked(struct sched *s, uint16_t who, uint32_t tile)
+{
+	if (who >= s->n_workers || s->trust[who].caught)
+		return;
+	struct trust *tr = &s->trust[who];
+	tr->caught = 1;
+	tr->tile = tile;
+	tr->requeued = 1; /* the tile whose audit failed: the audit's pixels replace it */
+	for (uint32_t i = 0; i < s->n; i++) {
+		struct ftile *t = &s->t[i];
+		if (t->done && t->by == who) {
+			t->done = 0;
+			t->by = HOLDER_NONE;
+			s->n_done--;
+			tr->requeued++;
+			sched_requeue_locked(s, i);
+		} else if (t->claim && t->claim_by == who) {
+			free(t->claim);
+			t->claim = NULL;
+			tr->requeued++;
+			sched_requeue_locked(s, i);
+		}
+	}
+	pthread_cond_broadcast(&s->cv);
+	sched_wake(s);
+}
+
+/*
+ * Pixels for tile id from a trusted source (the local renderer): settles a
+ * claim awaiting its audit (a mismatch distrusts the claimant), then stores
+ * them unless the tile is done already. Returns true if they were used. Locked.
+ */
+static bool sched_trusted_locked(struct sched *s, uint32_t id, const uint8_t *rgb)
+{
+	struct ftile *t = &s->t[id];
+	if (t->claim) {
+		uint8_t *claim = t->claim;
+		t->claim = NULL;
+		s->n_audits++;
+		if (memcmp(claim, rgb, (size_t)t->rect.w * t->rect.h * 3) != 0) {
+			s->n_audit_failed++;
+			sched_distrust_locked(s, t->claim_by, id);
+		}
+		free(claim);
+	}
+	if (t->done)
+		return false;
+	sched_store_locked(s, id, HOLDER_LOCAL, rgb);
 	return true;
+}
+
+/* Stores a finished tile unless someone was first; returns true if it was used.
+ * A local result (who == HOLDER_LOCAL) also settles a pending audit. Locked. */
+static bool sched_finish_locked(struct sched *s, uint32_t id, uint16_t who, const uint8_t *rgb)
+{
+	struct ftile *t = &s->t[id];
+	holder_del(t, who);
+	if (who == HOLDER_LOCAL) {
+		bool used = sched_trusted_locked(s, id, rgb);
+		if (!used)
+			s->dup_wasted++;
+		return used;
+	}
+	if (t->done || t->claim) {
+		s->dup_wasted++;
+		return false;
+	}
+	sched_store_locked(s, id, who, rgb);
+	return true;
+}
+
+/* Holds worker who's pixels for tile id as a claim (copied) and queues its
+ * audit; false (nothing changed) if out of memory. Locked. */
+static bool sched_claim_locked(struct sched *s, uint32_t id, uint16_t who, const uint8_t *rgb)
+{
+	struct ftile *t = &s->t[id];
+	size_t n = (size_t)t->rect.w * t->rect.h * 3;
+	uint8_t *copy = malloc(n);
+	if (!copy)
+		return false;
+	memcpy(copy, rgb, n);
+	holder_del(t, who);
+	t->claim = copy;
+	t->claim_by = who;
+	if (!t->audit_queued) {
+		s->audits[(s->a_head + s->a_len) % s->n] = id;
+		s->a_len++;
+		t->audit_queued = 1;
+	}
+	pthread_cond_broadcast(&s->cv);
+	return true;
+}
+
+/* Pops a tile whose claim awaits its audit (skipping settled ones and those a
+ * local thread traces anyway: its result settles the claim). Locked. */
+static uint32_t sched_take_audit_locked(struct sched *s)
+{
+	while (s->a_len) {
+		uint32_t id = s->audits[s->a_head];
+		s->a_head = (s->a_head + 1) % s->n;
+		s->a_len--;
+		struct ftile *t = &s->t[id];
+		t->audit_queued = 0;
+		if (t->claim && !t->done && !holds(t, HOLDER_LOCAL))
+			return id;
+	}
+	return UINT32_MAX;
 }
 
 /* ---- local threads ---- */
@@ -184,36 +342,43 @@ static bool sched_finish_locked(struct sched *s, uint32_t id, uint16_t who, cons
 struct local {
 	struct sched *s;
 	const struct renderer *r;
-	uint32_t tile;
+	uint8_t *buf;          /* one tile (owned by farm_render) */
+	bool audit_only;       /* --no-local: audits, never ordinary tiles */
 };
 
+/* A local thread: audits first (they hold tiles back and unmask liars early),
+ * then ordinary tiles, until the render stops. */
 static void *local_thread(void *arg)
 {
 	struct local *L = arg;
 	struct sched *s = L->s;
-	uint8_t *buf = malloc((size_t)L->tile * L->tile * 3);
-	if (!buf)
-		return NULL;
 	pthread_mutex_lock(&s->mu);
 	while (!atomic_load(&s->stop)) {
-		uint32_t id = sched_take_locked(s, HOLDER_LOCAL, true, net_now());
+		bool audit = true;
+		uint32_t id = sched_take_audit_locked(s);
+		if (id == UINT32_MAX && !L->audit_only) {
+			audit = false;
+			id = sched_take_locked(s, HOLDER_LOCAL, true, net_now());
+		}
 		if (id == UINT32_MAX) {
 			pthread_cond_wait(&s->cv, &s->mu);
 			continue;
 		}
 		struct tile_rect rect = s->t[id].rect;
 		pthread_mutex_unlock(&s->mu);
-		int ok = renderer_tile_cancellable(L->r, rect, buf, &s->stop);
+		int ok = renderer_tile_cancellable(L->r, rect, L->buf, &s->stop);
 		pthread_mutex_lock(&s->mu);
-		if (ok) {
-			if (sched_finish_locked(s, id, HOLDER_LOCAL, buf))
+		if (audit) {
+			if (ok)
+				sched_trusted_locked(s, id, L->buf);
+		} else if (ok) {
+			if (sched_finish_locked(s, id, HOLDER_LOCAL, L->buf))
 				s->local_done++;
 		} else {
 			holder_del(&s->t[id], HOLDER_LOCAL);
 		}
 	}
 	pthread_mutex_unlock(&s->mu);
-	free(buf);
 	return NULL;
 }
 
@@ -245,7 +410,14 @@ struct worker {
 	uint32_t threads, depth;
 	uint64_t sent_off;     /* scene bytes queued so far */
 	uint32_t *inflight;    /* tile ids in flight on this connection */
+	double sent_at[FARM_DEPTH_MAX]; /* when each was sent */
 	uint32_t n_inflight;
+	double busy_since;     /* when n_inflight last went from 0 to 1 */
+	double last_result;    /* when its last valid result arrived */
+	double lat[FARM_LAT_KEEP]; /* recent tile latencies (sent to result), a ring */
+	uint32_t n_lat;
+	double median;         /* their median, 0 before the first */
+	uint32_t delivered;    /* tiles it delivered that were used or audited */
 	uint32_t cancelled[FARM_DEPTH_MAX]; /* cancelled ids that may still be answered */
 	uint32_t n_cancelled;
 	/* statistics over all connections */
@@ -274,6 +446,8 @@ struct farm {
 	double t0, last_progress;
 	uint64_t bytes_total;
 	uint32_t invalid_results;
+	double audit;          /* fraction of tiles audited after the probation; 0: no audits */
+	uint64_t audit_salt;   /* per render: a worker cannot tell which tiles are sampled */
 };
 
 static void flog(const struct farm *f, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
@@ -392,18 +566,9 @@ static void worker_start(struct farm *f, struct worker *w)
 	w->state = W_CONNECTING;
 }
 
-/*
- * Ends the current connection to w: its tiles go back to the queue. fatal
- * drops the worker for good; otherwise it is retried with back-off.
- */
-static void worker_lost(struct farm *f, struct worker *w, bool fatal, const char *fmt, ...)
-	__attribute__((format(printf, 4, 5)));
-static void worker_lost(struct farm *f, struct worker *w, bool fatal, const char *fmt, ...)
+/* Closes w's connection (if any); its tiles in flight go back to the queue. */
+static void worker_close(struct farm *f, struct worker *w)
 {
-	va_list ap;
-	va_start(ap, fmt);
-	vsnprintf(w->why, sizeof w->why, fmt, ap);
-	va_end(ap);
 	pthread_mutex_lock(&f->s.mu);
 	for (uint32_t i = 0; i < w->n_inflight; i++)
 		sched_release_locked(&f->s, w->inflight[i], w->index);
@@ -417,6 +582,21 @@ static void worker_lost(struct farm *f, struct worker *w, bool fatal, const char
 		w->pc = NULL;
 	}
 	w->state = W_IDLE;
+}
+
+/*
+ * Ends the current connection to w: its tiles go back to the queue. fatal
+ * drops the worker for good; otherwise it is retried with back-off.
+ */
+static void worker_lost(struct farm *f, struct worker *w, bool fatal, const char *fmt, ...)
+	__attribute__((format(printf, 4, 5)));
+static void worker_lost(struct farm *f, struct worker *w, bool fatal, const char *fmt, ...)
+{
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(w->why, sizeof w->why, fmt, ap);
+	va_end(ap);
+	worker_close(f, w);
 	if (!fatal && w->retries < FARM_MAX_RETRIES && !atomic_load(&f->s.stop)) {
 		w->retry_at = net_now() + FARM_BACKOFF_S * pow(2, w->retries);
 		w->retries++;
@@ -466,7 +646,8 @@ static void dispatch(struct farm *f, struct worker *w)
 		return;
 	double now = net_now();
 	pthread_mutex_lock(&f->s.mu);
-	while (w->n_inflight < w->depth && !atomic_load(&f->s.stop)) {
+	/* a worker caught lying gets nothing more (the loop drops it next) */
+	while (w->n_inflight < w->depth && !atomic_load(&f->s.stop) && !f->s.trust[w->index].caught) {
 		/* duplicates only for an idle worker: the tail, not the middle */
 		uint32_t id = sched_take_locked(&f->s, w->index, w->n_inflight == 0, now);
 		if (id == UINT32_MAX)
@@ -474,9 +655,12 @@ static void dispatch(struct farm *f, struct worker *w)
 		struct tile_rect r = f->s.t[id].rect;
 		struct proto_tile t = { id, r.x, r.y, r.w, r.h };
 		if (proto_send_tile(w->pc, &t) < 0) {
-			holder_del(&f->s.t[id], w->index);
+			sched_release_locked(&f->s, id, w->index);
 			break;
 		}
+		if (w->n_inflight == 0)
+			w->busy_since = now;
+		w->sent_at[w->n_inflight] = now;
 		w->inflight[w->n_inflight++] = id;
 	}
 	pthread_mutex_unlock(&f->s.mu);
@@ -507,7 +691,9 @@ static void cancel_on(struct worker *w, uint32_t id)
 	for (uint32_t k = 0; k < w->n_inflight; k++) {
 		if (w->inflight[k] != id)
 			continue;
-		w->inflight[k] = w->inflight[--w->n_inflight];
+		w->n_inflight--;
+		w->inflight[k] = w->inflight[w->n_inflight];
+		w->sent_at[k] = w->sent_at[w->n_inflight];
 		if (w->n_cancelled == FARM_DEPTH_MAX) /* forget the oldest */
 			memmove(w->cancelled, w->cancelled + 1, --w->n_cancelled * sizeof *w->cancelled);
 		w->cancelled[w->n_cancelled++] = id;
@@ -516,7 +702,52 @@ static void cancel_on(struct worker *w, uint32_t id)
 	}
 }
 
-/* A TILE_RESULT from w: check it against what was sent, then store it. */
+/* Keeps a tile latency of w and its median (the hung-tile deadline). */
+static void note_latency(struct worker *w, double dt)
+{
+	w->lat[w->n_lat % FARM_LAT_KEEP] = dt;
+	w->n_lat++;
+	uint32_t n = w->n_lat < FARM_LAT_KEEP ? w->n_lat : FARM_LAT_KEEP;
+	double v[FARM_LAT_KEEP];
+	memcpy(v, w->lat, n * sizeof *v);
+	for (uint32_t i = 1; i < n; i++) /* insertion sort: a few dozen values */
+		for (uint32_t j = i; j > 0 && v[j - 1] > v[j]; j--) {
+			double x = v[j];
+			v[j] = v[j - 1];
+			v[j - 1] = x;
+		}
+	w->median = v[n / 2];
+}
+
+/* A 64-bit mix (splitmix64's finaliser): spreads the bits of x evenly. */
+static uint64_t mix64(uint64_t x)
+{
+	x ^= x >> 30;
+	x *= 0xbf58476d1ce4e5b9ULL;
+	x ^= x >> 27;
+	x *= 0x94d049bb133111ebULL;
+	x ^= x >> 31;
+	return x;
+}
+
+/*
+ * Whether w's result for tile id is audited: every tile of its probation (the
+ * first FARM_AUDIT_PROBATION it delivers), then the tiles a salted hash of
+ * (tile, worker) puts below the audit fraction. The choice depends on neither
+ * timing nor anything the worker can see (the salt is random per render).
+ */
+static bool audit_due(const struct farm *f, const struct worker *w, uint32_t id)
+{
+	if (f->audit <= 0)
+		return false;
+	if (w->delivered < FARM_AUDIT_PROBATION)
+		return true;
+	uint64_t h = mix64(f->audit_salt ^ mix64(((uint64_t)id << 16) ^ w->index));
+	return (double)(h >> 11) * 0x1p-53 < f->audit;
+}
+
+/* A TILE_RESULT from w: check it against what was sent, then store it (or hold
+ * it back for its audit). */
 static void on_result(struct farm *f, struct worker *w, const struct proto_msg *m)
 {
 	const struct proto_tile *t = &m->u.result.tile;
@@ -548,6 +779,8 @@ static void on_result(struct farm *f, struct worker *w, const struct proto_msg *
 	/* a valid tile earns the worker its retries back (reaching READY does
 	 * not: a worker failing every tile after READY was retried for ever) */
 	w->retries = 0;
+	double now = net_now();
+	w->last_result = now;
 	if (k == w->n_inflight) { /* answered after its CANCEL: someone else was first */
 		w->cancelled[c] = w->cancelled[--w->n_cancelled];
 		pthread_mutex_lock(&f->s.mu);
@@ -555,16 +788,32 @@ static void on_result(struct farm *f, struct worker *w, const struct proto_msg *
 		pthread_mutex_unlock(&f->s.mu);
 		return;
 	}
-	w->inflight[k] = w->inflight[--w->n_inflight];
+	note_latency(w, now - w->sent_at[k]);
+	w->n_inflight--;
+	w->inflight[k] = w->inflight[w->n_inflight];
+	w->sent_at[k] = w->sent_at[w->n_inflight];
 	pthread_mutex_lock(&f->s.mu);
-	/* the other holder (if remote) may stop working on it */
 	struct ftile *ft = &f->s.t[t->id];
 	uint16_t other = ft->holder[0] == w->index ? ft->holder[1] : ft->holder[0];
-	bool used = sched_finish_locked(&f->s, t->id, w->index, m->u.result.pixels);
+	bool used;
+	if (f->s.trust[w->index].caught) { /* caught lying: nothing it sends is used */
+		sched_release_locked(&f->s, t->id, w->index);
+		used = false;
+	} else if (!ft->done && !ft->claim && audit_due(f, w, t->id) &&
+		   sched_claim_locked(&f->s, t->id, w->index, m->u.result.pixels)) {
+		used = true; /* held back until the local render agrees */
+	} else {
+		used = sched_finish_locked(&f->s, t->id, w->index, m->u.result.pixels);
+	}
+	/* the other holder (if remote) may stop working on it */
+	bool cancel_other = used && other < f->n_w && f->w[other].state == W_READY;
+	if (cancel_other)
+		holder_del(ft, other);
 	pthread_mutex_unlock(&f->s.mu);
 	if (used) {
 		w->tiles_done++;
-		if (other < f->n_w && f->w[other].state == W_READY)
+		w->delivered++;
+		if (cancel_other)
 			cancel_on(&f->w[other], t->id);
 	}
 }
@@ -760,8 +1009,9 @@ static void summary(struct farm *f)
 	}
 	fprintf(stderr,
 		"portray-master: farm: %u tiles of %u px in %.2f s; %u re-dispatched, %u duplicates (%u wasted), "
-		"%u invalid results\n",
-		f->s.n, f->tile, el, f->s.redispatched, f->s.duplicates, f->s.dup_wasted, f->invalid_results);
+		"%u invalid results, %u audits (%u failed)\n",
+		f->s.n, f->tile, el, f->s.redispatched, f->s.duplicates, f->s.dup_wasted, f->invalid_results,
+		f->s.n_audits, f->s.n_audit_failed);
 	fprintf(stderr, "portray-master:   %-24s %6u tiles %5.1f%%\n", "local", f->s.local_done,
 		100.0 * f->s.local_done / f->s.n);
 	for (uint32_t i = 0; i < f->n_w; i++) {
@@ -788,10 +1038,44 @@ static bool any_worker_alive(const struct farm *f)
 	return false;
 }
 
-/* Timers: connects due, heartbeat deadlines, our own heartbeats. */
+/* Drops the workers an audit caught since the last call, and says so. */
+static void drop_caught(struct farm *f)
+{
+	for (uint32_t i = 0; i < f->n_w; i++) {
+		struct worker *w = &f->w[i];
+		pthread_mutex_lock(&f->s.mu);
+		struct trust tr = f->s.trust[i];
+		f->s.trust[i].reported = tr.caught;
+		pthread_mutex_unlock(&f->s.mu);
+		if (!tr.caught || tr.reported)
+			continue;
+		snprintf(w->why, sizeof w->why, "returned wrong pixels for tile %u (audit)", tr.tile);
+		if (w->pc && w->state >= W_HELLO) {
+			proto_send_error(w->pc, PERR_PROTOCOL, "wrong pixels for tile %u (audit)", tr.tile);
+			proto_conn_flush(w->pc);
+		}
+		worker_close(f, w);
+		w->dropped = true;
+		w->tiles_done = 0; /* none of its tiles is kept */
+		flog(f, "worker %s returned wrong pixels for tile %u (audit): dropped; its %u tiles re-rendered",
+		     w->name, tr.tile, tr.requeued);
+	}
+}
+
+/* The hung-tile deadline of w: how long it may hold tiles without returning any. */
+static double hang_deadline(const struct farm *f, const struct worker *w)
+{
+	if (w->n_lat == 0)
+		return FARM_HANG_HB_FIRST * f->hb_timeout;
+	double d = FARM_HANG_MEDIANS * w->median;
+	return d > FARM_HANG_HB * f->hb_timeout ? d : FARM_HANG_HB * f->hb_timeout;
+}
+
+/* Timers: connects due, heartbeat and hung-tile deadlines, our own heartbeats. */
 static void tick(struct farm *f)
 {
 	double now = net_now();
+	drop_caught(f);
 	for (uint32_t i = 0; i < f->n_w; i++) {
 		struct worker *w = &f->w[i];
 		if (w->state == W_IDLE) {
@@ -805,6 +1089,17 @@ static void tick(struct farm *f)
 			worker_lost(f, w, false, "%s for %.1f s",
 				    w->state == W_CONNECTING ? "no connection" : "no heartbeat", now - w->last_rx);
 			continue;
+		}
+		if (w->state == W_READY && w->n_inflight > 0) {
+			/* a tracer stuck on a tile while the worker heartbeats */
+			double since = w->last_result > w->busy_since ? w->last_result : w->busy_since;
+			double d = hang_deadline(f, w);
+			if (now - since > d) {
+				worker_refuse(f, w, PERR_TIMEOUT,
+					      "hung: no tile result for %.1f s while holding %u tiles (deadline %.1f s)",
+					      now - since, w->n_inflight, d);
+				continue;
+			}
 		}
 		if (w->state >= W_HELLO && now - w->last_hb >= f->hb_interval) {
 			proto_send_heartbeat(w->pc, 0, 0);
@@ -947,8 +1242,8 @@ int farm_render(const struct master_opts *o, const struct scene *sc, struct rend
 	int rc = EXIT_USAGE;
 	int wake[2] = { -1, -1 };
 	pthread_t *tids = NULL;
-	int n_local = 0;
-	struct local L;
+	struct local *L = NULL;
+	int n_local = 0, n_threads = 0;
 	bool sched_init = false;
 
 	if (parse_workers(&f) < 0)
@@ -985,7 +1280,10 @@ int farm_render(const struct master_opts *o, const struct scene *sc, struct rend
 	s->image = image;
 	s->t = calloc(s->n, sizeof *s->t);
 	s->queue = calloc(s->n, sizeof *s->queue);
-	if (!s->t || !s->queue || pipe(wake) < 0) {
+	s->audits = calloc(s->n, sizeof *s->audits);
+	s->trust = calloc(f.n_w, sizeof *s->trust);
+	s->n_workers = f.n_w;
+	if (!s->t || !s->queue || !s->audits || !s->trust || pipe(wake) < 0) {
 		fprintf(stderr, "portray-master: out of memory for %u tiles\n", s->n);
 		goto out;
 	}
@@ -996,7 +1294,7 @@ int farm_render(const struct master_opts *o, const struct scene *sc, struct rend
 		struct ftile *t = &s->t[i];
 		uint32_t x = (i % tx) * f.tile, y = (i / tx) * f.tile;
 		t->rect = (struct tile_rect){ x, y, x + f.tile > w ? w - x : f.tile, y + f.tile > h ? h - y : f.tile };
-		t->holder[0] = t->holder[1] = HOLDER_NONE;
+		t->holder[0] = t->holder[1] = t->by = HOLDER_NONE;
 		t->queued = 1;
 		s->queue[i] = i;
 	}
@@ -1006,15 +1304,38 @@ int farm_render(const struct master_opts *o, const struct scene *sc, struct rend
 	atomic_init(&s->stop, 0);
 	sched_init = true;
 
+	/* audits: on the local threads; with --no-local on one thread that takes
+	 * nothing else. Buffers first: a thread that cannot trace would leave
+	 * its audits waiting for ever */
+	f.audit = o->audit;
+	if (f.audit > 0 && proto_random((uint8_t *)&f.audit_salt, sizeof f.audit_salt) < 0)
+		f.audit_salt = mix64((uint64_t)getpid() ^ (uint64_t)(net_now() * 1e9));
+	n_threads = o->no_local ? (f.audit > 0) : o->threads > 0 ? o->threads : render_ncpus();
+	if (n_threads > 0) {
+		tids = calloc((size_t)n_threads, sizeof *tids);
+		L = calloc((size_t)n_threads, sizeof *L);
+		for (int i = 0; L && i < n_threads; i++) {
+			L[i] = (struct local){ s, r, malloc((size_t)f.tile * f.tile * 3), o->no_local };
+			if (!L[i].buf)
+				n_threads = i;
+		}
+		if (!tids || !L || n_threads == 0) {
+			fprintf(stderr, "portray-master: out of memory for local threads\n");
+			rc = ERRLEVEL_FATAL;
+			goto out;
+		}
+	}
 	for (uint32_t i = 0; i < f.n_w; i++)
 		worker_start(&f, &f.w[i]);
-	if (!o->no_local) {
-		n_local = o->threads > 0 ? o->threads : render_ncpus();
-		tids = calloc((size_t)n_local, sizeof *tids);
-		L = (struct local){ s, r, f.tile };
-		for (int i = 0; tids && i < n_local; i++)
-			if (pthread_create(&tids[i], NULL, local_thread, &L) != 0)
-				n_local = i;
+	for (int i = 0; i < n_threads; i++) {
+		if (pthread_create(&tids[i], NULL, local_thread, &L[i]) != 0)
+			break;
+		n_local++;
+	}
+	if (n_threads > 0 && n_local == 0) {
+		fprintf(stderr, "portray-master: cannot start a local thread\n");
+		rc = ERRLEVEL_FATAL;
+		goto out;
 	}
 	rc = farm_loop(&f, cancel, wake[0]);
 	atomic_store(&s->stop, 1);
@@ -1044,8 +1365,15 @@ out:
 	}
 	free(f.w);
 	free(tids);
+	for (int i = 0; L && i < n_threads; i++)
+		free(L[i].buf);
+	free(L);
+	for (uint32_t i = 0; f.s.t && i < f.s.n; i++)
+		free(f.s.t[i].claim);
 	free(f.s.t);
 	free(f.s.queue);
+	free(f.s.audits);
+	free(f.s.trust);
 	free(f.scene);
 	free(f.secret);
 	for (int i = 0; i < 2; i++)

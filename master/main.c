@@ -27,6 +27,8 @@ static void usage(FILE *f)
 		"      --secret-file FILE   shared secret for the worker handshake\n"
 		"      --no-local           do not trace on this machine, workers only\n"
 		"      --heartbeat-timeout S  drop a worker silent for S seconds (default 10)\n"
+		"      --audit F            re-render fraction F (0..1) of worker tiles here to check\n"
+		"                           them (default 0.03; 0: no audits; see docs/protocol.md)\n"
 		"  -h, --help               show this help\n"
 		"  -V, --version            show the version\n"
 		"\n"
@@ -45,7 +47,7 @@ static int parse_uint(const char *s, unsigned long max, unsigned long *out)
 	return 0;
 }
 
-enum { OPT_CHECK = 256, OPT_TILE, OPT_SIZE, OPT_WFILE, OPT_SECRET, OPT_NOLOCAL, OPT_HB };
+enum { OPT_CHECK = 256, OPT_TILE, OPT_SIZE, OPT_WFILE, OPT_SECRET, OPT_NOLOCAL, OPT_HB, OPT_AUDIT };
 
 int main(int argc, char **argv)
 {
@@ -62,11 +64,12 @@ int main(int argc, char **argv)
 		{ "secret-file", required_argument, NULL, OPT_SECRET },
 		{ "no-local", no_argument, NULL, OPT_NOLOCAL },
 		{ "heartbeat-timeout", required_argument, NULL, OPT_HB },
+		{ "audit", required_argument, NULL, OPT_AUDIT },
 		{ "help", no_argument, NULL, 'h' },
 		{ "version", no_argument, NULL, 'V' },
 		{ NULL, 0, NULL, 0 },
 	};
-	struct master_opts o = { .tile = 32, .heartbeat_s = 10.0 };
+	struct master_opts o = { .tile = 32, .heartbeat_s = 10.0, .audit = MASTER_AUDIT_DEFAULT };
 	unsigned long v;
 	int c;
 	while ((c = getopt_long(argc, argv, "c:o:j:qw:hV", longopts, NULL)) != -1) {
@@ -110,6 +113,15 @@ int main(int argc, char **argv)
 			o.heartbeat_s = strtod(optarg, &end);
 			if (*end || !(o.heartbeat_s > 0 && o.heartbeat_s < 86400)) {
 				fprintf(stderr, "portray-master: --heartbeat-timeout wants seconds, not '%s'\n", optarg);
+				return EXIT_USAGE;
+			}
+			break;
+		}
+		case OPT_AUDIT: {
+			char *end;
+			o.audit = strtod(optarg, &end);
+			if (end == optarg || *end || !(o.audit >= 0 && o.audit <= 1)) {
+				fprintf(stderr, "portray-master: --audit wants a fraction 0..1, not '%s'\n", optarg);
 				return EXIT_USAGE;
 			}
 			break;

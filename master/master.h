@@ -15,6 +15,10 @@ enum {
 	EXIT_INTERRUPTED = 130 /* never used for a finished partial render */
 };
 
+/* default --audit: about 3 tiles in 100 re-rendered locally (plus each
+ * worker's first few), a few percent of the farm's work */
+#define MASTER_AUDIT_DEFAULT 0.03
+
 struct master_opts {
 	const char *camera;    /* -c FILE, may be NULL */
 	const char *scene;     /* SCENE */
@@ -29,6 +33,8 @@ struct master_opts {
 	const char *secret_file;  /* --secret-file F */
 	bool no_local;         /* --no-local */
 	double heartbeat_s;    /* --heartbeat-timeout S (farm) */
+	double audit;          /* --audit F: fraction of worker tiles re-rendered here to check them (farm);
+				* 0 = no audits; main sets MASTER_AUDIT_DEFAULT */
 };
 
 struct scene_camera;

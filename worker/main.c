@@ -41,6 +41,13 @@
 #define WK_IDLE_MIN_S 30.0
 /* seconds the listening socket rests after accept() ran out of descriptors */
 #define WK_ACCEPT_PAUSE_S 0.25
+/* --test-fault lie: tiles 2, 2 + k, 2 + 2k, ... (counted from 1 over the
+ * process) are wrong: never the first, which every master audits */
+#define WK_LIE_EVERY 4
+/* --test-fault hang-tile: the third tile hangs, after two results have given
+ * the master a tile time */
+#define WK_HANG_AT 3
+
 /* default scene cache budget, MiB of encoded scene bytes */
 #define WK_CACHE_MB_DEFAULT 1024
 
@@ -51,7 +58,10 @@ enum wk_fault {
 	FAULT_PROTO_VERSION,
 	FAULT_BUILD,
 	FAULT_BLACK,
-	FAULT_TRACE_FAIL /* every tile fails as if out of memory */
+	FAULT_TRACE_FAIL, /* every tile fails as if out of memory */
+	FAULT_LIE,        /* every WK_LIE_EVERY-th tile traced, from the second: one pixel's low bit
+			   * flipped before the checksum (wrong pixels, valid checksum) */
+	FAULT_HANG_TILE   /* the WK_HANG_AT-th tile traced never finishes (until shutdown) */
 };
 
 /* ---- options and global state ---- */
@@ -325,6 +335,17 @@ static void *tracer(void *arg)
 			ok = renderer_tile_cancellable(r, rect, px, &pool.cancel_all);
 			if (opt.fault == FAULT_TRACE_FAIL)
 				ok = 0;
+			if (opt.fault == FAULT_LIE || opt.fault == FAULT_HANG_TILE) {
+				static atomic_uint traced;
+				unsigned nth = atomic_fetch_add(&traced, 1) + 1;
+				if (ok && opt.fault == FAULT_LIE && nth % WK_LIE_EVERY == 2 % WK_LIE_EVERY)
+					px[0] ^= 1; /* the checksum is computed below, over this */
+				while (opt.fault == FAULT_HANG_TILE && nth == WK_HANG_AT &&
+				       !atomic_load(&pool.cancel_all)) {
+					struct timespec ts = { 0, 50 * 1000000L };
+					nanosleep(&ts, NULL);
+				}
+			}
 			if (opt.delay_ms > 0) {
 				struct timespec ts = { opt.delay_ms / 1000, (long)(opt.delay_ms % 1000) * 1000000L };
 				nanosleep(&ts, NULL);
@@ -1137,6 +1158,10 @@ int main(int argc, char **argv)
 				opt.fault = FAULT_BLACK;
 			else if (strcmp(optarg, "trace-fail") == 0)
 				opt.fault = FAULT_TRACE_FAIL;
+			else if (strcmp(optarg, "lie") == 0)
+				opt.fault = FAULT_LIE;
+			else if (strcmp(optarg, "hang-tile") == 0)
+				opt.fault = FAULT_HANG_TILE;
 			else {
 				fprintf(stderr, "portray-worker: unknown --test-fault '%s'\n", optarg);
 				return 64;
