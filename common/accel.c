@@ -88,6 +88,9 @@ struct gmesh {
 	uint32_t obj;
 };
 
+/* hit.surf_kind: what surface_complete completes */
+enum { SURF_SPHERE, SURF_TRI, SURF_XPRIM };
+
 struct gtri {
 	uint32_t mesh, tri;
 };
@@ -539,7 +542,7 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 		    ps->equator.y == 0 && ps->equator.z == 0) {
 			/* the default frame: u, v from h->n later (surface_complete) */
 			h->surf_fn = surface_cb;
-			h->surf = NULL; /* a sphere (else the triangle's mesh) */
+			h->surf_kind = SURF_SPHERE;
 		} else {
 			struct geom_obj go;
 			geom_obj_init(s, sp->obj, &go); /* sphere: no allocation */
@@ -571,6 +574,7 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 		h->mp = v3(0, 0, 0);
 		h->u = h->v = 0;
 		h->surf_fn = surface_cb; /* mp, u, v later */
+		h->surf_kind = SURF_TRI;
 		h->surf = m;
 		h->surf_idx = g->tri[i].tri;
 		h->surf_b1 = c->b1;
@@ -587,14 +591,25 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 			const struct geom_obj *go = g->xp[i].g;
 			vec3 lp = go->has_xform ? m34_point(&go->inv, p) : p;
 			vec3 n;
-			geom_surface(go, lp, c->part, &n, &h->u, &h->v);
+			/* spheres' and cylinders' mappings (atan2, asin) later, from mp */
+			bool lazy = go->kind == PRIM_SPHERE || go->kind == PRIM_CYLINDER;
+			if (lazy) {
+				n = geom_normal(go, lp, c->part);
+				h->u = h->v = 0;
+				h->surf_fn = surface_cb;
+				h->surf_kind = SURF_XPRIM;
+				h->surf = go;
+				h->surf_idx = (uint32_t)c->part;
+			} else {
+				geom_surface(go, lp, c->part, &n, &h->u, &h->v);
+				h->surf_fn = NULL;
+			}
 			if (go->has_xform)
 				n = v3_norm(m34_normal(&go->inv, n));
 			h->n = h->ng = n;
 			h->mp = lp;
 			h->object = g->xp[i].obj;
 			h->material = s->objects[h->object].material;
-			h->surf_fn = NULL;
 		}
 		break;
 	default:
@@ -616,7 +631,10 @@ static void surface_complete(const struct scene *s, struct hit *h)
 {
 	if (!h->surf_fn)
 		return;
-	if (!h->surf) { /* a sphere */
+	if (h->surf_kind == SURF_XPRIM) { /* geom_surface's mapping at the object-space point */
+		vec3 n;
+		geom_surface(h->surf, h->mp, (int)h->surf_idx, &n, &h->u, &h->v);
+	} else if (h->surf_kind == SURF_SPHERE) {
 		/* the default frame: P = +y, E = +x, W = P x E = -z (as geom_surface) */
 		const struct prim_sphere *ps = &s->objects[h->object].u.sphere;
 		vec3 q = h->n;
@@ -644,7 +662,7 @@ static void surface_complete(const struct scene *s, struct hit *h)
 	h->surf_fn = NULL;
 }
 
-/* hit.surf_fn of a hit awaiting its u, v and mp (accel_hit_surface). */
+/* hit.surf_fn of a hit awaiting its u, v (and mp) (accel_hit_surface). */
 static void surface_cb(const struct accel *a, struct hit *h) { surface_complete(a->s, h); }
 
 /* The unbounded references of g (planes and the like), tested for every

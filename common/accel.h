@@ -45,7 +45,7 @@ struct hit {
 	 * mock accel) must set surf_fn = NULL if shading may ask for them. */
 	void (*surf_fn)(const struct accel *a, struct hit *h);
 	const void *surf;
-	uint32_t surf_idx;
+	uint32_t surf_kind, surf_idx;
 	double surf_b1, surf_b2;
 };
 

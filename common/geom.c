@@ -620,7 +620,10 @@ void geom_tri_uv(vec3 a, vec3 b, vec3 c, vec3 p, double *u, double *v)
 	geom_tri_uv_n(a, b, v3_norm(v3_cross(v3_sub(b, a), v3_sub(c, a))), p, u, v);
 }
 
-void geom_surface(const struct geom_obj *g, vec3 p, int part, vec3 *n, double *u, double *v)
+/* geom_surface and geom_normal: uv false skips the mapping (u, v are then
+ * scratch), never changing *n. */
+static inline __attribute__((always_inline)) void surface(const struct geom_obj *g, vec3 p, int part, vec3 *n,
+							  double *u, double *v, const bool uv)
 {
 	*u = *v = 0;
 	switch (g->kind) {
@@ -628,6 +631,8 @@ void geom_surface(const struct geom_obj *g, vec3 p, int part, vec3 *n, double *u
 		vec3 q = v3_norm(v3_sub(p, g->u.sph.c));
 		double r = g->u.sph.r;
 		*n = q;
+		if (!uv)
+			break;
 		*u = r * angle_2pi(v3_dot(q, g->u.sph.W), v3_dot(q, g->u.sph.E));
 		double s = v3_dot(q, g->u.sph.P);
 		s = s > 1 ? 1 : s < -1 ? -1 : s;
@@ -648,7 +653,8 @@ void geom_surface(const struct geom_obj *g, vec3 p, int part, vec3 *n, double *u
 		if (part == GEOM_PART_MAIN) {
 			vec3 rad = v3_sub(q, v3_scale(g->u.cyl.a, z));
 			*n = v3_norm(rad);
-			*u = g->u.cyl.r * angle_2pi(v3_dot(rad, g->u.cyl.Y), v3_dot(rad, g->u.cyl.X));
+			if (uv)
+				*u = g->u.cyl.r * angle_2pi(v3_dot(rad, g->u.cyl.Y), v3_dot(rad, g->u.cyl.X));
 			*v = z;
 		} else {
 			vec3 c = part == GEOM_PART_CAP0 ? g->u.cyl.from
@@ -687,7 +693,8 @@ void geom_surface(const struct geom_obj *g, vec3 p, int part, vec3 *n, double *u
 			if (v3_len(sn) > 0)
 				*n = v3_norm(sn);
 		}
-		geom_tri_uv(a, b, c, p, u, v);
+		if (uv)
+			geom_tri_uv(a, b, c, p, u, v);
 		break;
 	}
 	case PRIM_POLYGON: {
@@ -701,6 +708,19 @@ void geom_surface(const struct geom_obj *g, vec3 p, int part, vec3 *n, double *u
 		*n = v3(0, 1, 0);
 		break;
 	}
+}
+
+void geom_surface(const struct geom_obj *g, vec3 p, int part, vec3 *n, double *u, double *v)
+{
+	surface(g, p, part, n, u, v, true);
+}
+
+vec3 geom_normal(const struct geom_obj *g, vec3 p, int part)
+{
+	vec3 n;
+	double u, v;
+	surface(g, p, part, &n, &u, &v, false);
+	return n;
 }
 
 /* ---- watertight ray set-up ---------------------------------------------------------------------------- */

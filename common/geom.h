@@ -94,6 +94,8 @@ static inline bool geom_plane_t(vec3 pos, vec3 n, vec3 o, vec3 d, double *t)
 
 /* Unit outward (object-space) normal and (u,v) at object-space point p of part. */
 void geom_surface(const struct geom_obj *g, vec3 p, int part, vec3 *n, double *u, double *v);
+/* geom_surface's *n alone (the same bits), without the mapping's cost. */
+vec3 geom_normal(const struct geom_obj *g, vec3 p, int part);
 
 /* Triangle (u,v) mapping: lengths along unit(b-a) and along n x unit(b-a) from a. */
 void geom_tri_uv(vec3 a, vec3 b, vec3 c, vec3 p, double *u, double *v);
