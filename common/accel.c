@@ -124,6 +124,8 @@ struct group {
 	uint32_t n_inst;
 	vec3 *bake;     /* baked vertices and normals (owned) */
 	struct geom_box bounds; /* of the bounded references */
+	const struct geom_obj *plane1; /* the only unbounded reference when it is an
+					  untransformed plane (tested inline), else NULL */
 	vec3 center;    /* node bounds are relative to this point */
 	size_t bytes;
 };
@@ -810,7 +812,19 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 static bool group_hit(const struct accel *A, const struct group *g, struct trace *r, struct hit *h, bool brute)
 {
 	struct cand best;
-	bool found = g->n_unb ? unb_hit(A, g, r, &best, brute) : false;
+	bool found = false;
+	if (g->plane1) { /* unb_hit's plane test, the common case of one ground plane */
+		double t;
+		const struct geom_obj *go = g->plane1;
+		if (geom_plane_t(go->u.pl.pos, go->u.pl.n, r->o, r->d, &t) && t > r->tmin && t < r->tmax) {
+			best.ref = g->unb[0];
+			best.t = r->tmax = t;
+			best.part = GEOM_PART_MAIN;
+			found = true;
+		}
+	} else if (g->n_unb) {
+		found = unb_hit(A, g, r, &best, brute);
+	}
 	if (brute) {
 		found |= brute_hit(A, g, r, &best);
 	} else if (g->bvh.root_n) { /* the root is one leaf */
@@ -1340,6 +1354,11 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	rb.ref = NULL;
 	rb.box = NULL;
 	g->n_unb = n_unb;
+	if (n_unb == 1 && REF_KIND(unb[0]) == REF_XPRIM) {
+		const struct geom_obj *go = g->xp[REF_IDX(unb[0])].g;
+		if (go->kind == PRIM_PLANE && !go->has_xform)
+			g->plane1 = go;
+	}
 	g->n_refs = n_bounded;
 	uint32_t *unb_fit = realloc(g->unb, (n_unb ? n_unb : 1) * sizeof *unb_fit);
 	if (unb_fit)
