@@ -491,7 +491,7 @@ static inline __attribute__((always_inline)) bool ref_test(const struct accel *A
 		const struct gmesh *m = &g->mesh[g->tri[i].mesh];
 		const uint32_t *ix = tri_ix(m, g->tri[i].tri);
 		double b1, b2;
-		if (!geom_tri_hit(trace_wray(r), m->v[ix[0]], m->v[ix[1]], m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2))
+		if (!geom_tri_hit_p(trace_wray(r), &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2))
 			return false;
 		c->b1 = b1;
 		c->b2 = b2;

@@ -12,6 +12,7 @@
 
 #include <stdbool.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "common/accel.h"
 
@@ -143,15 +144,24 @@ void geom_wray_init(struct geom_wray *w, vec3 o, vec3 d);
  * both sides; edges shared by two triangles are hit by exactly one of them
  * or both, never neither.
  */
-static inline bool geom_tri_hit(const struct geom_wray *w, vec3 a, vec3 b, vec3 c, double tmin,
-				double tmax, double *t, double *b1, double *b2)
+/* Component k (0 x, 1 y, 2 z) of *v, read through its bytes (no array
+ * copy of the vertex: one load). */
+static inline double geom_comp(const vec3 *v, int k)
+{
+	double x;
+	memcpy(&x, (const char *)v + (size_t)k * sizeof x, sizeof x);
+	return x;
+}
+
+/* geom_tri_hit with the vertices by address (the same arithmetic). */
+static inline bool geom_tri_hit_p(const struct geom_wray *w, const vec3 *a, const vec3 *b, const vec3 *c,
+				  double tmin, double tmax, double *t, double *b1, double *b2)
 {
 	/* vertices relative to the origin, permuted (only the components used) */
 	const int kx = w->kx, ky = w->ky, kz = w->kz;
-	double va[3] = { a.x, a.y, a.z }, vb[3] = { b.x, b.y, b.z }, vc[3] = { c.x, c.y, c.z };
-	double Ax = va[kx] - w->ox, Ay = va[ky] - w->oy, Az = va[kz] - w->oz;
-	double Bx = vb[kx] - w->ox, By = vb[ky] - w->oy, Bz = vb[kz] - w->oz;
-	double Cx = vc[kx] - w->ox, Cy = vc[ky] - w->oy, Cz = vc[kz] - w->oz;
+	double Ax = geom_comp(a, kx) - w->ox, Ay = geom_comp(a, ky) - w->oy, Az = geom_comp(a, kz) - w->oz;
+	double Bx = geom_comp(b, kx) - w->ox, By = geom_comp(b, ky) - w->oy, Bz = geom_comp(b, kz) - w->oz;
+	double Cx = geom_comp(c, kx) - w->ox, Cy = geom_comp(c, ky) - w->oy, Cz = geom_comp(c, kz) - w->oz;
 	double ax = Ax - w->sx * Az, ay = Ay - w->sy * Az;
 	double bx = Bx - w->sx * Bz, by = By - w->sy * Bz;
 	double cx = Cx - w->sx * Cz, cy = Cy - w->sy * Cz;
@@ -171,6 +181,12 @@ static inline bool geom_tri_hit(const struct geom_wray *w, vec3 a, vec3 b, vec3 
 	*b1 = V / det;
 	*b2 = W / det;
 	return true;
+}
+
+static inline bool geom_tri_hit(const struct geom_wray *w, vec3 a, vec3 b, vec3 c, double tmin,
+				double tmax, double *t, double *b1, double *b2)
+{
+	return geom_tri_hit_p(w, &a, &b, &c, tmin, tmax, t, b1, b2);
 }
 
 /* ---- CSG (csg.c) --------------------------------------------------------- */
