@@ -730,12 +730,12 @@ static __attribute__((noinline)) bool brute_hit(const struct accel *A, const str
  * subtrees behind the closest hit so far popped and dropped. Same contract
  * as ref_test. */
 static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A, const struct group *g,
-							   struct trace *r, struct cand *best, const uint32_t oct)
+							   struct trace *r, struct cand *best, const struct ray4 *qp,
+							   const uint32_t oct)
 {
 	bool found = false;
 	const struct bvh4 *nodes = g->bvh.nodes;
-	struct ray4 q;
-	ray4_init(&q, r, g->center);
+	const struct ray4 q = *qp;
 	const tspan tmin = tspan_of((float)(r->tmin * q.tscale));
 	float tmax = (float)(r->tmax * q.tscale);
 	tspan tmax4 = tspan_of(tmax);
@@ -832,15 +832,17 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 			for (uint32_t k = 0; k < g->bvh.root_n; k++)
 				found |= ref_test(A, g, group_ref(g, g->bvh.root_idx + k), r, &best, false);
 	} else if (g->bvh.n_nodes4) {
-		switch (ray_octant(r->d)) { /* one copy of the loop per octant: near planes at fixed offsets */
-		case 0: found |= bvh_hit(A, g, r, &best, 0); break;
-		case 1: found |= bvh_hit(A, g, r, &best, 1); break;
-		case 2: found |= bvh_hit(A, g, r, &best, 2); break;
-		case 3: found |= bvh_hit(A, g, r, &best, 3); break;
-		case 4: found |= bvh_hit(A, g, r, &best, 4); break;
-		case 5: found |= bvh_hit(A, g, r, &best, 5); break;
-		case 6: found |= bvh_hit(A, g, r, &best, 6); break;
-		default: found |= bvh_hit(A, g, r, &best, 7); break;
+		struct ray4 q4;
+		ray4_init(&q4, r, g->center);
+		switch (q4.oct) { /* one copy of the loop per octant: near planes at fixed offsets */
+		case 0: found |= bvh_hit(A, g, r, &best, &q4, 0); break;
+		case 1: found |= bvh_hit(A, g, r, &best, &q4, 1); break;
+		case 2: found |= bvh_hit(A, g, r, &best, &q4, 2); break;
+		case 3: found |= bvh_hit(A, g, r, &best, &q4, 3); break;
+		case 4: found |= bvh_hit(A, g, r, &best, &q4, 4); break;
+		case 5: found |= bvh_hit(A, g, r, &best, &q4, 5); break;
+		case 6: found |= bvh_hit(A, g, r, &best, &q4, 6); break;
+		default: found |= bvh_hit(A, g, r, &best, &q4, 7); break;
 		}
 	}
 	if (found)
