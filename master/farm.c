@@ -803,6 +803,8 @@ static void on_result(struct farm *f, struct worker *w, const struct proto_msg *
 		   sched_claim_locked(&f->s, t->id, w->index, m->u.result.pixels)) {
 		used = true; /* held back until the local render agrees */
 	} else {
+		/* not sampled, a duplicate, or no memory to hold a claim: stored
+		 * as it is (undone if the worker is caught later) */
 		used = sched_finish_locked(&f->s, t->id, w->index, m->u.result.pixels);
 	}
 	/* the other holder (if remote) may stop working on it */
