@@ -84,6 +84,8 @@ struct gmesh {
 	const vec3 *v;      /* vertices in the group's space */
 	const vec3 *n;      /* normals in the group's space, or NULL */
 	const vec3 *ov;     /* vertices in the object's own space (for mp, uv) */
+	const vec3 *fn;     /* a plain triangle's unit face normal (from v, as finish
+			       computes it), or NULL (raw meshes: computed per hit) */
 	const uint32_t *ix; /* 3 per triangle */
 	uint32_t obj;
 };
@@ -377,6 +379,13 @@ static inline uint32_t group_ref(const struct group *g, uint32_t k)
 
 static inline const uint32_t *tri_ix(const struct gmesh *m, uint32_t tri) { return m->ix + 3 * (size_t)tri; }
 
+/* The unit face normal of triangle ix of m, from its group-space vertices. */
+static inline vec3 tri_normal(const struct gmesh *m, const uint32_t *ix)
+{
+	vec3 a = m->v[ix[0]], b = m->v[ix[1]], cc = m->v[ix[2]];
+	return v3_norm(v3_cross(v3_sub(b, a), v3_sub(cc, a)));
+}
+
 static void inst_matrix(const struct ginst *in, mat34 *m)
 {
 	for (int i = 0; i < 3; i++)
@@ -560,8 +569,7 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 		const struct gmesh *m = &g->mesh[g->tri[i].mesh];
 		const uint32_t *ix = tri_ix(m, g->tri[i].tri);
 		double w0 = 1 - c->b1 - c->b2;
-		vec3 a = m->v[ix[0]], b = m->v[ix[1]], cc = m->v[ix[2]];
-		vec3 fn = v3_norm(v3_cross(v3_sub(b, a), v3_sub(cc, a)));
+		vec3 fn = m->fn ? *m->fn : tri_normal(m, ix);
 		h->ng = fn;
 		h->n = fn;
 		if (m->n) {
@@ -654,8 +662,7 @@ static void surface_complete(const struct scene *s, struct hit *h)
 		vec3 oa = m->ov[ix[0]], ob = m->ov[ix[1]], oc = m->ov[ix[2]];
 		h->mp = v3_add(v3_add(v3_scale(oa, w0), v3_scale(ob, b1)), v3_scale(oc, b2));
 		if (m->ov == m->v) { /* untransformed: geom_tri_uv's normal is the face normal, computed alike */
-			vec3 a = m->v[ix[0]], b = m->v[ix[1]], cc = m->v[ix[2]];
-			vec3 fn = v3_norm(v3_cross(v3_sub(b, a), v3_sub(cc, a)));
+			vec3 fn = m->fn ? *m->fn : tri_normal(m, ix);
 			geom_tri_uv_n(oa, ob, fn, h->mp, &h->u, &h->v);
 		} else {
 			geom_tri_uv(oa, ob, oc, h->mp, &h->u, &h->v);
@@ -1183,7 +1190,7 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			break;
 		case PRIM_TRIANGLE:
 			n_mesh++, n_tri++;
-			n_bake += 3 + (o->u.triangle.has_normals ? 3 : 0) + (o->has_xform ? 3 : 0);
+			n_bake += 4 + (o->u.triangle.has_normals ? 3 : 0) + (o->has_xform ? 3 : 0);
 			break;
 		case PRIM_RAW: {
 			const struct scene_mesh *m = &s->meshes[o->u.raw.mesh];
@@ -1274,6 +1281,9 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 					m->n = nn;
 				}
 				m->ix = tri_ix012;
+				vec3 *fn = &g->bake[nb++];
+				*fn = tri_normal(m, tri_ix012);
+				m->fn = fn;
 				ntri = 1;
 			} else {
 				const struct scene_mesh *sm = &s->meshes[o->u.raw.mesh];
