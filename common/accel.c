@@ -76,8 +76,12 @@ enum { REF_SPHERE = 0, REF_TRI = 1, REF_XPRIM = 2, REF_INST = 3 };
 struct gsphere {
 	vec3 c;
 	double r2;
-	uint32_t obj;
+	uint32_t obj; /* object index, | GSPH_FRAME when its pole/equator are not the default */
+	uint32_t mat; /* the object's material (finish reads no scene object) */
 };
+/* gsphere.obj flag (object indices are below LIM_OBJECTS = 2^26) */
+#define GSPH_FRAME 0x80000000u
+_Static_assert(LIM_OBJECTS <= GSPH_FRAME, "object indices leave gsphere.obj's flag bit free");
 
 /* A mesh slot: one raw object or one plain triangle. */
 struct gmesh {
@@ -544,25 +548,24 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 	switch (REF_KIND(c->ref)) {
 	case REF_SPHERE: {
 		const struct gsphere *sp = &g->sph[i];
-		const struct prim_sphere *ps = &s->objects[sp->obj].u.sphere;
+		uint32_t obj = sp->obj & ~GSPH_FRAME;
 		vec3 q = v3_norm(v3_sub(p, sp->c));
 		h->n = h->ng = q;
 		h->mp = p;
 		h->u = h->v = 0;
-		if (ps->pole.x == 0 && ps->pole.y == 1 && ps->pole.z == 0 && ps->equator.x == 1 &&
-		    ps->equator.y == 0 && ps->equator.z == 0) {
+		if (!(sp->obj & GSPH_FRAME)) {
 			/* the default frame: u, v from h->n later (surface_complete) */
 			h->surf_fn = surface_cb;
 			h->surf_kind = SURF_SPHERE;
 		} else {
 			struct geom_obj go;
-			geom_obj_init(s, sp->obj, &go); /* sphere: no allocation */
+			geom_obj_init(s, obj, &go); /* sphere: no allocation */
 			geom_surface(&go, p, GEOM_PART_MAIN, &h->n, &h->u, &h->v);
 			h->ng = h->n;
 			h->surf_fn = NULL;
 		}
-		h->object = sp->obj;
-		h->material = s->objects[sp->obj].material;
+		h->object = obj;
+		h->material = sp->mat;
 		break;
 	}
 	case REF_TRI: {
@@ -1241,7 +1244,11 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			struct gsphere *sp = &g->sph[g->n_sph];
 			sp->c = o->u.sphere.centre;
 			sp->r2 = o->u.sphere.radius * o->u.sphere.radius;
-			sp->obj = oi;
+			const struct prim_sphere *ps = &o->u.sphere;
+			bool dflt = ps->pole.x == 0 && ps->pole.y == 1 && ps->pole.z == 0 && ps->equator.x == 1 &&
+				    ps->equator.y == 0 && ps->equator.z == 0; /* P = +y, E = +x */
+			sp->obj = oi | (dflt ? 0 : GSPH_FRAME);
+			sp->mat = o->material;
 			vec3 rr = v3(o->u.sphere.radius, o->u.sphere.radius, o->u.sphere.radius);
 			bx.lo = v3_sub(sp->c, rr);
 			bx.hi = v3_add(sp->c, rr);
