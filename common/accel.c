@@ -92,6 +92,7 @@ struct gmesh {
 			       computes it), or NULL (raw meshes: computed per hit) */
 	const uint32_t *ix; /* 3 per triangle */
 	uint32_t obj;
+	uint32_t mat;       /* the object's material (finish reads no scene object) */
 };
 
 /* hit.surf_kind: what surface_complete completes */
@@ -593,7 +594,7 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 		h->surf_b1 = c->b1;
 		h->surf_b2 = c->b2;
 		h->object = m->obj;
-		h->material = s->objects[m->obj].material;
+		h->material = m->mat;
 		break;
 	}
 	case REF_XPRIM:
@@ -1260,6 +1261,7 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			struct gmesh *m = &g->mesh[g->n_mesh];
 			memset(m, 0, sizeof *m);
 			m->obj = oi;
+			m->mat = o->material;
 			uint32_t ntri;
 			mat34 inv;
 			if (o->has_xform && !m34_invert(&o->xform, &inv))
