@@ -12,30 +12,11 @@
 
 #include "common/accel.h"
 #include "common/rng.h"
+#include "tests/unit/build_util.h"
 #include "tests/unit/check.h"
 
 static struct scene_error err;
 
-static uint32_t add(struct scene *s, struct scene_object *o)
-{
-	uint32_t id;
-	if (scene_add_object(s, o, &id, &err)) {
-		fprintf(stderr, "builder: %s\n", err.msg);
-		abort();
-	}
-	return id;
-}
-
-static uint32_t material(struct scene *s, double r)
-{
-	struct scene_material m;
-	scene_material_defaults(&m);
-	m.diff_colour = v3(r, 0, 0);
-	uint32_t id;
-	if (scene_add_material(s, &m, &id, &err))
-		abort();
-	return id;
-}
 
 #define N_MEMBERS 8
 
@@ -95,7 +76,7 @@ static void add_members(struct scene *s, const mat34 *pre, uint32_t mesh, uint32
 			o[i].xform = m34_mul(pre, &o[i].xform);
 			o[i].has_xform = true;
 		}
-		ids[i] = add(s, &o[i]);
+		ids[i] = bu_add(s, &o[i]);
 	}
 }
 
@@ -149,15 +130,15 @@ static uint32_t instance(struct scene *s, uint32_t def, const mat34 *m, uint32_t
 	o.xform = *m;
 	o.has_xform = true;
 	o.material = mat;
-	return add(s, &o);
+	return bu_add(s, &o);
 }
 
 /* A wall: 2 walls of 3 rows of 3 blocks, through nested defines and inline. */
 static void instanced_equals_inline(void)
 {
 	struct scene *si = scene_new(), *sl = scene_new();
-	uint32_t mi_own = material(si, 0.1), mi_inst = material(si, 0.2), mi_row = material(si, 0.3);
-	uint32_t ml_own = material(sl, 0.1), ml_inst = material(sl, 0.2), ml_row = material(sl, 0.3);
+	uint32_t mi_own = bu_material(si, 0.1), mi_inst = bu_material(si, 0.2), mi_row = bu_material(si, 0.3);
+	uint32_t ml_own = bu_material(sl, 0.1), ml_inst = bu_material(sl, 0.2), ml_row = bu_material(sl, 0.3);
 	uint32_t mesh_i = small_mesh(si), mesh_l = small_mesh(sl);
 	uint32_t block[N_MEMBERS];
 	add_members(si, NULL, mesh_i, mi_own, block);
@@ -268,12 +249,12 @@ static void instanced_equals_inline(void)
 static void mp_owner(void)
 {
 	struct scene *s = scene_new();
-	uint32_t m = material(s, 0.5);
+	uint32_t m = bu_material(s, 0.5);
 	struct scene_object o;
 	scene_object_defaults(&o, PRIM_SPHERE);
 	scene_xform_op(&o.xform, XF_TRANSLATE, 0, 0, v3(1, 0, 0)); /* member: sphere at x=1 */
 	o.has_xform = true;
-	uint32_t sp = add(s, &o);
+	uint32_t sp = bu_add(s, &o);
 	uint32_t d = define(s, "ball", &sp, 1);
 	mat34 t = m34_identity();
 	scene_xform_op(&t, XF_TRANSLATE, 0, 0, v3(10, 0, 0));
@@ -313,7 +294,7 @@ static void unbounded_and_empty(void)
 	struct scene *s = scene_new();
 	struct scene_object o;
 	scene_object_defaults(&o, PRIM_PLANE);
-	uint32_t pl = add(s, &o);
+	uint32_t pl = bu_add(s, &o);
 	uint32_t d = define(s, "floor", &pl, 1);
 	struct scene_define e;
 	memset(&e, 0, sizeof e);
@@ -351,7 +332,7 @@ static void define_depth(void)
 		struct scene *s = scene_new();
 		struct scene_object o;
 		scene_object_defaults(&o, PRIM_SPHERE);
-		uint32_t cur = add(s, &o);
+		uint32_t cur = bu_add(s, &o);
 		mat34 t = m34_identity();
 		scene_xform_op(&t, XF_TRANSLATE, 0, 0, v3(0.01, 0, 0));
 		for (int i = 0; i < LIM_DEFINE_DEPTH + extra; i++) {

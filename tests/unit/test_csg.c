@@ -11,32 +11,13 @@
 #include <string.h>
 
 #include "common/accel.h"
+#include "tests/unit/build_util.h"
 #include "tests/unit/check.h"
 
 #define EPS 1e-9
 
 static struct scene_error err;
 
-static uint32_t add(struct scene *s, struct scene_object *o)
-{
-	uint32_t id;
-	if (scene_add_object(s, o, &id, &err)) {
-		fprintf(stderr, "builder: %s\n", err.msg);
-		abort();
-	}
-	return id;
-}
-
-static uint32_t material(struct scene *s, double r)
-{
-	struct scene_material m;
-	scene_material_defaults(&m);
-	m.diff_colour = v3(r, 0, 0);
-	uint32_t id;
-	if (scene_add_material(s, &m, &id, &err))
-		abort();
-	return id;
-}
 
 static uint32_t sphere(struct scene *s, vec3 c, double r, uint32_t mat)
 {
@@ -45,7 +26,7 @@ static uint32_t sphere(struct scene *s, vec3 c, double r, uint32_t mat)
 	o.u.sphere.centre = c;
 	o.u.sphere.radius = r;
 	o.material = mat;
-	return add(s, &o);
+	return bu_add(s, &o);
 }
 
 static uint32_t box(struct scene *s, vec3 a, vec3 b, uint32_t mat)
@@ -55,7 +36,7 @@ static uint32_t box(struct scene *s, vec3 a, vec3 b, uint32_t mat)
 	o.u.box.a = a;
 	o.u.box.b = b;
 	o.material = mat;
-	return add(s, &o);
+	return bu_add(s, &o);
 }
 
 static uint32_t csg(struct scene *s, enum csg_op op, uint32_t a, uint32_t b, uint32_t mat)
@@ -66,7 +47,7 @@ static uint32_t csg(struct scene *s, enum csg_op op, uint32_t a, uint32_t b, uin
 	o.u.csg.operand1 = a;
 	o.u.csg.operand2 = b;
 	o.material = mat;
-	return add(s, &o);
+	return bu_add(s, &o);
 }
 
 struct expect {
@@ -119,7 +100,7 @@ static void spheres(void)
 	for (int op = CSG_UNION; op <= CSG_SUBTRACT; op++) {
 		for (int swap = 0; swap < 2; swap++) {
 			struct scene *s = scene_new();
-			uint32_t ma = material(s, 0.1), mb = material(s, 0.2);
+			uint32_t ma = bu_material(s, 0.1), mb = bu_material(s, 0.2);
 			uint32_t a = sphere(s, v3(-0.5, 0, 0), 1, ma), b = sphere(s, v3(0.5, 0, 0), 1, mb);
 			uint32_t root = swap ? csg(s, (enum csg_op)op, b, a, SCENE_NONE) : csg(s, (enum csg_op)op, a, b, SCENE_NONE);
 			/* at y = 0.9: A spans [-0.936, -0.064], B [0.064, 0.936] */
@@ -160,7 +141,7 @@ static void boxes(void)
 {
 	for (int op = CSG_UNION; op <= CSG_SUBTRACT; op++) {
 		struct scene *s = scene_new();
-		uint32_t ma = material(s, 0.1), mb = material(s, 0.2), mn = material(s, 0.3);
+		uint32_t ma = bu_material(s, 0.1), mb = bu_material(s, 0.2), mn = bu_material(s, 0.3);
 		uint32_t a = box(s, v3(0, 0, 0), v3(2, 2, 2), ma), b = box(s, v3(3, 3, 3), v3(1, 1, 1), SCENE_NONE);
 		uint32_t root = csg(s, (enum csg_op)op, a, b, mn); /* B inherits the node's */
 		(void)mb;
@@ -188,12 +169,12 @@ static void boxes(void)
 static void planes_and_surfaces(void)
 {
 	struct scene *s = scene_new();
-	uint32_t ms = material(s, 0.1), mp = material(s, 0.2);
+	uint32_t ms = bu_material(s, 0.1), mp = bu_material(s, 0.2);
 	uint32_t sp = sphere(s, v3(0, 0, 0), 1, ms);
 	struct scene_object o;
 	scene_object_defaults(&o, PRIM_PLANE); /* y = 0, normal +y: keeps y < 0 */
 	o.material = mp;
-	uint32_t pl = add(s, &o);
+	uint32_t pl = bu_add(s, &o);
 	uint32_t root = csg(s, CSG_INTERSECT, sp, pl, SCENE_NONE);
 	struct expect e1[] = {
 		{ v3(0, 5, 0), v3(0, -1, 0), true, 5, mp, v3(0, 1, 0) },
@@ -207,14 +188,14 @@ static void planes_and_surfaces(void)
 	/* a disk (z = 0, radius 2) with a unit sphere, each operation */
 	for (int op = CSG_UNION; op <= CSG_SUBTRACT + 1; op++) {
 		s = scene_new();
-		ms = material(s, 0.1);
-		uint32_t md = material(s, 0.2);
+		ms = bu_material(s, 0.1);
+		uint32_t md = bu_material(s, 0.2);
 		sp = sphere(s, v3(0, 0, 0), 1, ms);
 		scene_object_defaults(&o, PRIM_DISK);
 		o.u.plane.normal = v3(0, 0, 1);
 		o.u.plane.radius = 2;
 		o.material = md;
-		uint32_t dk = add(s, &o);
+		uint32_t dk = bu_add(s, &o);
 		/* op 3: sphere - disk (the disk's parts are never drawn) */
 		root = op <= CSG_SUBTRACT ? csg(s, (enum csg_op)op, dk, sp, SCENE_NONE) : csg(s, CSG_SUBTRACT, sp, dk, SCENE_NONE);
 		vec3 c = v3(0, 0, -5), side = v3(1.5, 0, -5), z = v3(0, 0, 1), nz = v3(0, 0, -1);
@@ -238,11 +219,11 @@ static void planes_and_surfaces(void)
 
 	/* an open cylinder is its capped solid inside, but its caps are not drawn */
 	s = scene_new();
-	ms = material(s, 0.1);
+	ms = bu_material(s, 0.1);
 	scene_object_defaults(&o, PRIM_CYLINDER);
 	o.u.cylinder.from = v3(0, -1, 0);
 	o.u.cylinder.to = v3(0, 1, 0);
-	uint32_t cy = add(s, &o);
+	uint32_t cy = bu_add(s, &o);
 	sp = sphere(s, v3(0, 0, 0), 5, ms);
 	uint32_t in = csg(s, CSG_INTERSECT, cy, sp, SCENE_NONE);
 	struct expect e2[] = {
@@ -253,8 +234,8 @@ static void planes_and_surfaces(void)
 	scene_free(s);
 
 	s = scene_new();
-	ms = material(s, 0.1);
-	cy = add(s, &o);
+	ms = bu_material(s, 0.1);
+	cy = bu_add(s, &o);
 	sp = sphere(s, v3(0, 0, 0), 5, ms);
 	uint32_t big = sphere(s, v3(0, 10, 0), 9.5, ms); /* cuts the cylinder above y = 0.5 */
 	in = csg(s, CSG_INTERSECT, cy, sp, SCENE_NONE);
@@ -271,7 +252,7 @@ static void planes_and_surfaces(void)
 static void mesh_solid(void)
 {
 	struct scene *s = scene_new();
-	uint32_t mm = material(s, 0.1), ms = material(s, 0.2);
+	uint32_t mm = bu_material(s, 0.1), ms = bu_material(s, 0.2);
 	struct scene_mesh m;
 	memset(&m, 0, sizeof m);
 	m.file = strdup("cube.raw");
@@ -306,7 +287,7 @@ static void mesh_solid(void)
 	scene_object_defaults(&o, PRIM_RAW);
 	o.u.raw.mesh = mid;
 	o.material = mm;
-	uint32_t cube = add(s, &o);
+	uint32_t cube = bu_add(s, &o);
 	uint32_t sp = sphere(s, v3(1, 0, 0), 0.5, ms);
 	uint32_t root = csg(s, CSG_SUBTRACT, cube, sp, SCENE_NONE);
 	struct expect e[] = {
@@ -324,7 +305,7 @@ static void mesh_solid(void)
 static void instances_and_transforms(void)
 {
 	struct scene *s = scene_new();
-	uint32_t ma = material(s, 0.1), mb = material(s, 0.2), mi = material(s, 0.3);
+	uint32_t ma = bu_material(s, 0.1), mb = bu_material(s, 0.2), mi = bu_material(s, 0.3);
 	uint32_t a = sphere(s, v3(0, 0, 0), 1, SCENE_NONE); /* member without a material */
 	struct scene_define d;
 	memset(&d, 0, sizeof d);
@@ -340,7 +321,7 @@ static void instances_and_transforms(void)
 	o.material = mi;
 	CHECK(scene_xform_op(&o.xform, XF_TRANSLATE, 0, 0, v3(-0.5, 0, 0)));
 	o.has_xform = true;
-	uint32_t ia = add(s, &o);
+	uint32_t ia = bu_add(s, &o);
 	uint32_t b = sphere(s, v3(0.5, 0, 0), 1, mb);
 	scene_object_defaults(&o, PRIM_CSG);
 	o.u.csg.op = CSG_INTERSECT;
@@ -349,7 +330,7 @@ static void instances_and_transforms(void)
 	o.material = ma;
 	CHECK(scene_xform_op(&o.xform, XF_TRANSLATE, 0, 0, v3(0, 10, 0)));
 	o.has_xform = true;
-	uint32_t root = add(s, &o);
+	uint32_t root = bu_add(s, &o);
 	struct expect e[] = {
 		{ v3(-5, 10, 0), X, true, 4.5, mb, NX },
 		{ v3(5, 10, 0), NX, true, 4.5, mi, X }, /* instance's material over the node's */
