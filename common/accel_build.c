@@ -1,0 +1,603 @@
+/*
+ * accel_build.c - building the multi-level BVH: one group for the scene's
+ * roots and one per define (built once, on first use), every object turned
+ * into references (accel.c's header describes them), sliver triangles split
+ * into several boxes, instance transforms rounded to the float inverse the
+ * traversal uses, and the nesting depths checked before anything is built.
+ */
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "common/accel_int.h"
+
+static const uint32_t tri_ix012[3] = { 0, 1, 2 };
+
+/* ---- building ------------------------------------------------------------------------ */
+
+static void group_free(struct group *g)
+{
+	if (!g)
+		return;
+	bvh_free(&g->bvh);
+	free(g->refs);
+	free(g->unb);
+	free(g->sph);
+	free(g->mesh);
+	free(g->tri);
+	free(g->xp);
+	free(g->inst);
+	free(g->bake);
+	free(g);
+}
+
+void accel_free(struct accel *a)
+{
+	if (!a)
+		return;
+	if (a->gobj) {
+		for (uint32_t i = 0; i < a->s->n_objects; i++) {
+			geom_obj_clear(a->gobj[i]);
+			free(a->gobj[i]);
+		}
+		free(a->gobj);
+	}
+	if (a->dgroup) {
+		for (uint32_t i = 0; i < a->s->n_defines; i++)
+			group_free(a->dgroup[i]);
+		free(a->dgroup);
+	}
+	group_free(a->root);
+	free(a);
+}
+
+/* The geom_obj of object i, made on first use; NULL when out of memory. */
+static struct geom_obj *get_gobj(struct accel *A, uint32_t i)
+{
+	if (!A->gobj) { /* the table exists only in scenes that need it */
+		A->gobj = calloc((size_t)A->s->n_objects + 1, sizeof *A->gobj);
+		if (!A->gobj)
+			return NULL;
+		A->st.bytes += ((size_t)A->s->n_objects + 1) * sizeof *A->gobj;
+	}
+	if (!A->gobj[i]) {
+		struct geom_obj *g = malloc(sizeof *g);
+		if (!g)
+			return NULL;
+		if (geom_obj_init(A->s, i, g) < 0) {
+			free(g);
+			return NULL;
+		}
+		A->gobj[i] = g;
+		A->st.bytes += sizeof *g;
+		if (g->kind == PRIM_POLYGON)
+			A->st.bytes += g->u.poly.n_points * 2 * sizeof(double);
+	}
+	return A->gobj[i];
+}
+
+/* Makes the geom_obj of obj and of everything below it (CSG subtrees). */
+static int prep_tree(struct accel *A, uint32_t obj)
+{
+	if (!get_gobj(A, obj))
+		return -1;
+	const struct scene_object *o = &A->s->objects[obj];
+	if (o->kind == PRIM_CSG)
+		return prep_tree(A, o->u.csg.operand1) || prep_tree(A, o->u.csg.operand2) ? -1 : 0;
+	if (o->kind == PRIM_INSTANCE) {
+		const struct scene_define *d = &A->s->defines[o->u.instance.define];
+		for (uint32_t k = 0; k < d->n_objects; k++)
+			if (prep_tree(A, d->objects[k]))
+				return -1;
+	}
+	return 0;
+}
+
+/* Pads a box by a relative epsilon so double rounding never culls a hit. */
+static struct geom_box pad_box(struct geom_box b)
+{
+	double m = fmax(fmax(fabs(b.lo.x), fabs(b.lo.y)), fmax(fabs(b.lo.z), fabs(b.hi.x)));
+	m = fmax(m, fmax(fabs(b.hi.y), fabs(b.hi.z)));
+	double e = 1e-9 * m + 1e-300;
+	vec3 ev = v3(e, e, e);
+	b.lo = v3_sub(b.lo, ev);
+	b.hi = v3_add(b.hi, ev);
+	return b;
+}
+
+static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t n, struct scene_error *err);
+
+/* Bounded references and their boxes while a group is built (grows). */
+struct refbuf {
+	uint32_t *ref;
+	struct geom_box *box;
+	uint32_t n, cap;
+};
+
+static int refbuf_push(struct refbuf *b, uint32_t ref, struct geom_box box)
+{
+	if (b->n == b->cap) {
+		if (b->cap >= ACCEL_MAX_REFS)
+			return -1;
+		uint32_t nc = b->cap ? (b->cap > ACCEL_MAX_REFS / 2 ? ACCEL_MAX_REFS : b->cap * 2) : 64;
+		uint32_t *nr = realloc(b->ref, (size_t)nc * sizeof *nr);
+		if (!nr)
+			return -1;
+		b->ref = nr;
+		struct geom_box *nbx = realloc(b->box, (size_t)nc * sizeof *nbx);
+		if (!nbx)
+			return -1;
+		b->box = nbx;
+		b->cap = nc;
+	}
+	b->ref[b->n] = ref;
+	b->box[b->n++] = box;
+	return 0;
+}
+
+/* Early split clipping: a triangle whose box is SPLIT_RATIO times its own
+ * area or more (long diagonal slivers, as ear-clipped gear faces make) is
+ * referenced by the boxes of its pieces clipped to halves of its box, down
+ * to SPLIT_DEPTH levels. The pieces cover the triangle; a ray meeting it
+ * through two pieces tests it twice and keeps the one t. */
+#define SPLIT_RATIO 24.0
+#define SPLIT_DEPTH 3
+
+/* Clips convex polygon p (n <= 9 + depth vertices) to the side of the plane
+ * x[axis] = at given by keep_below; returns the new count (out has room). */
+static int clip_half(const vec3 *p, int n, int axis, double at, bool keep_below, vec3 *out)
+{
+	int m = 0;
+	for (int i = 0; i < n; i++) {
+		vec3 a = p[i], b = p[(i + 1) % n];
+		double da = v3_comp(a, axis) - at, db = v3_comp(b, axis) - at;
+		if (!keep_below)
+			da = -da, db = -db;
+		if (da <= 0)
+			out[m++] = a;
+		if ((da < 0 && db > 0) || (da > 0 && db < 0)) {
+			vec3 x = v3_lerp(a, b, da / (da - db));
+			if (axis == 0)
+				x.x = at;
+			else if (axis == 1)
+				x.y = at;
+			else
+				x.z = at;
+			out[m++] = x;
+		}
+	}
+	return m;
+}
+
+static int push_pieces(struct refbuf *rb, uint32_t ref, const vec3 *poly, int n, int depth)
+{
+	struct geom_box bx = geom_box_empty();
+	for (int i = 0; i < n; i++)
+		bx = geom_box_point(bx, poly[i]);
+	vec3 e = v3_sub(bx.hi, bx.lo);
+	if (depth == SPLIT_DEPTH || !(e.x > 0 || e.y > 0 || e.z > 0))
+		return refbuf_push(rb, ref, pad_box(bx));
+	int axis = e.x >= e.y && e.x >= e.z ? 0 : e.y >= e.z ? 1 : 2;
+	double at = 0.5 * (v3_comp(bx.lo, axis) + v3_comp(bx.hi, axis));
+	vec3 half[16];
+	for (int side = 0; side < 2; side++) {
+		int m = clip_half(poly, n, axis, at, side == 0, half);
+		if (m >= 3 && push_pieces(rb, ref, half, m, depth + 1) < 0)
+			return -1;
+	}
+	return 0;
+}
+
+static int push_triangle(struct refbuf *rb, uint32_t ref, vec3 a, vec3 b, vec3 c)
+{
+	struct geom_box bx = geom_box_point(geom_box_point(geom_box_point(geom_box_empty(), a), b), c);
+	vec3 e = v3_sub(bx.hi, bx.lo);
+	double box_area = 2 * (e.x * e.y + e.y * e.z + e.z * e.x);
+	double tri_area = 0.5 * v3_len(v3_cross(v3_sub(b, a), v3_sub(c, a)));
+	if (!(tri_area > 0) || box_area < SPLIT_RATIO * tri_area)
+		return refbuf_push(rb, ref, pad_box(bx));
+	vec3 p[3] = { a, b, c };
+	return push_pieces(rb, ref, p, 3, 0);
+}
+
+/* The group of define d, built once. */
+static struct group *define_group(struct accel *A, uint32_t d, struct scene_error *err)
+{
+	if (!A->dgroup[d])
+		A->dgroup[d] = build_group(A, A->s->defines[d].objects, A->s->defines[d].n_objects, err);
+	return A->dgroup[d];
+}
+
+static void float_inverse(const mat34 *inv, struct ginst *gi, mat34 *rounded)
+{
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 4; j++) {
+			gi->inv[4 * i + j] = (float)inv->m[i][j];
+			rounded->m[i][j] = gi->inv[4 * i + j];
+		}
+}
+
+/*
+ * Builds the group over objects objs[0..n). Returns NULL with err filled on
+ * failure (out of memory or too many primitives).
+ */
+static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t n, struct scene_error *err)
+{
+	const struct scene *s = A->s;
+	struct group *g = calloc(1, sizeof *g);
+	struct geom_box *boxes = NULL;
+	uint32_t *all = NULL, *perm = NULL;
+	struct refbuf rb = { NULL, NULL, 0, 0 };
+	if (!g)
+		goto oom;
+	/* pass 1: counts */
+	uint64_t n_sph = 0, n_mesh = 0, n_tri = 0, n_xp = 0, n_inst = 0, n_bake = 0;
+	for (uint32_t k = 0; k < n; k++) {
+		const struct scene_object *o = &s->objects[objs[k]];
+		switch (o->kind) {
+		case PRIM_SPHERE:
+			if (o->has_xform)
+				n_xp++;
+			else
+				n_sph++;
+			break;
+		case PRIM_TRIANGLE:
+			n_mesh++, n_tri++;
+			n_bake += 4 + (o->u.triangle.has_normals ? 3 : 0) + (o->has_xform ? 3 : 0);
+			break;
+		case PRIM_RAW: {
+			const struct scene_mesh *m = &s->meshes[o->u.raw.mesh];
+			n_mesh++;
+			n_tri += m->n_triangles;
+			if (o->has_xform)
+				n_bake += (uint64_t)m->n_vertices * (m->normals ? 2 : 1);
+			break;
+		}
+		case PRIM_INSTANCE:
+			n_inst++;
+			break;
+		default:
+			n_xp++;
+			break;
+		}
+	}
+	uint64_t n_all = n_sph + n_tri + n_xp + n_inst;
+	if (n_all >= ACCEL_MAX_REFS) {
+		scene_errorf(err, ERRLEVEL_FATAL, "error: too many primitives in one group (%llu)",
+			     (unsigned long long)n_all);
+		goto fail;
+	}
+	g->sph = malloc((n_sph ? n_sph : 1) * sizeof *g->sph);
+	g->mesh = malloc((n_mesh ? n_mesh : 1) * sizeof *g->mesh);
+	g->tri = malloc((n_tri ? n_tri : 1) * sizeof *g->tri);
+	g->xp = malloc((n_xp ? n_xp : 1) * sizeof *g->xp);
+	g->inst = malloc((n_inst ? n_inst : 1) * sizeof *g->inst);
+	g->bake = malloc((n_bake ? n_bake : 1) * sizeof *g->bake);
+	if (!g->sph || !g->mesh || !g->tri || !g->xp || !g->inst || !g->bake)
+		goto oom;
+	g->bytes = sizeof *g + n_sph * sizeof *g->sph + n_mesh * sizeof *g->mesh + n_tri * sizeof *g->tri +
+		   n_xp * sizeof *g->xp + n_inst * sizeof *g->inst + n_bake * sizeof *g->bake;
+
+	/* pass 2: fill; bounded references go to all[]/boxes[], the rest to unb */
+	uint32_t n_unb = 0;
+	uint32_t *unb = malloc((n_all ? n_all : 1) * sizeof *unb);
+	if (!unb)
+		goto oom;
+	g->unb = unb;
+	size_t nb = 0;
+	for (uint32_t k = 0; k < n; k++) {
+		uint32_t oi = objs[k];
+		const struct scene_object *o = &s->objects[oi];
+		struct geom_box bx;
+		uint32_t ref;
+		if (o->kind == PRIM_SPHERE && !o->has_xform) {
+			struct gsphere *sp = &g->sph[g->n_sph];
+			sp->c = o->u.sphere.centre;
+			sp->r2 = o->u.sphere.radius * o->u.sphere.radius;
+			const struct prim_sphere *ps = &o->u.sphere;
+			bool dflt = ps->pole.x == 0 && ps->pole.y == 1 && ps->pole.z == 0 && ps->equator.x == 1 &&
+				    ps->equator.y == 0 && ps->equator.z == 0; /* P = +y, E = +x */
+			sp->obj = oi | (dflt ? 0 : GSPH_FRAME);
+			sp->mat = o->material;
+			vec3 rr = v3(o->u.sphere.radius, o->u.sphere.radius, o->u.sphere.radius);
+			bx.lo = v3_sub(sp->c, rr);
+			bx.hi = v3_add(sp->c, rr);
+			if (refbuf_push(&rb, REF_MAKE(REF_SPHERE, g->n_sph++), pad_box(bx)) < 0)
+				goto oom;
+			continue;
+		}
+		if (o->kind == PRIM_TRIANGLE || o->kind == PRIM_RAW) {
+			struct gmesh *m = &g->mesh[g->n_mesh];
+			memset(m, 0, sizeof *m);
+			m->obj = oi;
+			m->mat = o->material;
+			uint32_t ntri;
+			mat34 inv;
+			if (o->has_xform && !m34_invert(&o->xform, &inv))
+				inv = m34_identity();
+			if (o->kind == PRIM_TRIANGLE) {
+				const struct prim_triangle *t = &o->u.triangle;
+				vec3 *v = &g->bake[nb];
+				v[0] = t->a, v[1] = t->b, v[2] = t->c;
+				nb += 3;
+				m->ov = v;
+				m->v = v;
+				if (o->has_xform) {
+					vec3 *w = &g->bake[nb];
+					for (int q = 0; q < 3; q++)
+						w[q] = m34_point(&o->xform, v[q]);
+					nb += 3;
+					m->v = w;
+				}
+				if (t->has_normals) {
+					vec3 *nn = &g->bake[nb];
+					nn[0] = t->na, nn[1] = t->nb, nn[2] = t->nc;
+					if (o->has_xform)
+						for (int q = 0; q < 3; q++)
+							nn[q] = m34_normal(&inv, nn[q]);
+					nb += 3;
+					m->n = nn;
+				}
+				m->ix = tri_ix012;
+				vec3 *fn = &g->bake[nb++];
+				*fn = tri_normal(m, tri_ix012);
+				m->fn = fn;
+				ntri = 1;
+			} else {
+				const struct scene_mesh *sm = &s->meshes[o->u.raw.mesh];
+				m->ov = sm->vertices;
+				m->v = sm->vertices;
+				m->n = sm->normals;
+				m->ix = sm->tris;
+				if (o->has_xform) {
+					vec3 *w = &g->bake[nb];
+					for (uint32_t q = 0; q < sm->n_vertices; q++)
+						w[q] = m34_point(&o->xform, sm->vertices[q]);
+					nb += sm->n_vertices;
+					m->v = w;
+					if (sm->normals) {
+						vec3 *nn = &g->bake[nb];
+						for (uint32_t q = 0; q < sm->n_vertices; q++)
+							nn[q] = m34_normal(&inv, sm->normals[q]);
+						nb += sm->n_vertices;
+						m->n = nn;
+					}
+				}
+				ntri = sm->n_triangles;
+			}
+			for (uint32_t q = 0; q < ntri; q++) {
+				const uint32_t *ix = tri_ix(m, q);
+				g->tri[g->n_tri].mesh = g->n_mesh;
+				g->tri[g->n_tri].tri = q;
+				if (push_triangle(&rb, REF_MAKE(REF_TRI, g->n_tri++), m->v[ix[0]], m->v[ix[1]], m->v[ix[2]]) < 0)
+					goto oom;
+			}
+			g->n_mesh++;
+			continue;
+		}
+		if (o->kind == PRIM_INSTANCE) {
+			struct group *sub = define_group(A, o->u.instance.define, err);
+			if (!sub)
+				goto fail;
+			if (sub->n_refs == 0 && sub->n_unb == 0)
+				continue; /* an empty define draws nothing */
+			struct ginst *gi = &g->inst[g->n_inst];
+			gi->obj = oi;
+			mat34 inv = m34_identity(), rinv, fwd;
+			if (o->has_xform && !m34_invert(&o->xform, &inv))
+				inv = m34_identity();
+			float_inverse(&inv, gi, &rinv);
+			if (!m34_invert(&rinv, &fwd)) {
+				scene_errorf(err, ERRLEVEL_FATAL, "error: instance transform is singular in single precision");
+				goto fail;
+			}
+			ref = REF_MAKE(REF_INST, g->n_inst++);
+			A->st.n_instances++;
+			if (sub->n_unb) {
+				unb[n_unb++] = ref;
+				continue;
+			}
+			if (refbuf_push(&rb, ref, pad_box(geom_box_xform(&fwd, sub->bounds))) < 0)
+				goto oom;
+			continue;
+		}
+		/* xprim */
+		if (prep_tree(A, oi) < 0)
+			goto oom;
+		struct xprim *xp = &g->xp[g->n_xp];
+		xp->g = A->gobj[oi];
+		xp->obj = oi;
+		ref = REF_MAKE(REF_XPRIM, g->n_xp++);
+		bx = csg_bounds(s, (struct geom_obj *const *)A->gobj, oi);
+		if (bx.lo.x > bx.hi.x || bx.lo.y > bx.hi.y || bx.lo.z > bx.hi.z)
+			continue; /* empty: nothing to draw (e.g. disjoint intersect) */
+		if (!geom_box_finite(bx)) {
+			unb[n_unb++] = ref;
+			continue;
+		}
+		if (refbuf_push(&rb, ref, pad_box(bx)) < 0)
+			goto oom;
+	}
+	uint32_t n_bounded = rb.n;
+	all = rb.ref;
+	boxes = rb.box;
+	rb.ref = NULL;
+	rb.box = NULL;
+	g->n_unb = n_unb;
+	if (n_unb == 1 && REF_KIND(unb[0]) == REF_XPRIM) {
+		const struct geom_obj *go = g->xp[REF_IDX(unb[0])].g;
+		if (go->kind == PRIM_PLANE && !go->has_xform)
+			g->plane1 = go;
+	}
+	g->n_refs = n_bounded;
+	uint32_t *unb_fit = realloc(g->unb, (n_unb ? n_unb : 1) * sizeof *unb_fit);
+	if (unb_fit)
+		g->unb = unb_fit;
+	A->st.n_prims += g->n_sph + g->n_tri + g->n_xp;
+
+	/* pass 3: the BVH over the bounded references */
+	/* node bounds are stored relative to the group's centre, padded by
+	 * BOX_PAD_REL of the largest coordinate magnitude around it */
+	struct geom_box world = geom_box_empty();
+	for (uint32_t k = 0; k < n_bounded; k++)
+		world = geom_box_union(world, boxes[k]);
+	g->center = n_bounded ? v3_scale(v3_add(world.lo, world.hi), 0.5) : v3(0, 0, 0);
+	double big = 0;
+	for (uint32_t k = 0; k < n_bounded; k++) {
+		boxes[k].lo = v3_sub(boxes[k].lo, g->center);
+		boxes[k].hi = v3_sub(boxes[k].hi, g->center);
+		big = fmax(big, fmax(fmax(fabs(boxes[k].lo.x), fabs(boxes[k].lo.y)), fabs(boxes[k].lo.z)));
+		big = fmax(big, fmax(fmax(fabs(boxes[k].hi.x), fabs(boxes[k].hi.y)), fabs(boxes[k].hi.z)));
+	}
+	vec3 pad = v3(big * BOX_PAD_REL, big * BOX_PAD_REL, big * BOX_PAD_REL);
+	for (uint32_t k = 0; k < n_bounded; k++) {
+		boxes[k].lo = v3_sub(boxes[k].lo, pad);
+		boxes[k].hi = v3_add(boxes[k].hi, pad);
+	}
+	/* a group whose bounded references are ACCEL_PACK_MIN or more instances
+	 * and nothing else keeps its instance records in leaf order instead of a
+	 * reference array, and packs its leaves (see ACCEL_INST_LEAF) */
+	bool inst_only = n_bounded >= ACCEL_PACK_MIN;
+	for (uint32_t k = 0; k < n_bounded && inst_only; k++)
+		inst_only = REF_KIND(all[k]) == REF_INST;
+	perm = malloc((n_bounded ? n_bounded : 1) * sizeof *perm);
+	if (!inst_only)
+		g->refs = malloc((n_bounded ? n_bounded : 1) * sizeof *g->refs);
+	if (!perm || (!inst_only && !g->refs))
+		goto oom;
+	if (bvh_build_ex(&g->bvh, boxes, n_bounded, perm, inst_only ? ACCEL_INST_LEAF : ACCEL_MAX_LEAF, inst_only) < 0)
+		goto oom;
+	g->bounds = geom_box_empty();
+	for (uint32_t k = 0; k < n_bounded; k++)
+		g->bounds = geom_box_union(g->bounds, boxes[k]);
+	if (inst_only) { /* bounded instances in leaf order, then the unbounded ones */
+		struct ginst *ord = malloc((size_t)g->n_inst * sizeof *ord);
+		if (!ord)
+			goto oom;
+		for (uint32_t k = 0; k < n_bounded; k++)
+			ord[k] = g->inst[REF_IDX(all[perm[k]])];
+		uint32_t next = n_bounded;
+		for (uint32_t k = 0; k < g->n_unb; k++)
+			if (REF_KIND(g->unb[k]) == REF_INST) {
+				ord[next] = g->inst[REF_IDX(g->unb[k])];
+				g->unb[k] = REF_MAKE(REF_INST, next++);
+			}
+		free(g->inst);
+		g->inst = ord;
+	} else {
+		for (uint32_t k = 0; k < n_bounded; k++)
+			g->refs[k] = all[perm[k]];
+	}
+	if (n_bounded) { /* back to the group's space, covering the padding */
+		g->bounds.lo = v3_add(g->bounds.lo, g->center);
+		g->bounds.hi = v3_add(g->bounds.hi, g->center);
+		g->bounds = pad_box(g->bounds);
+	}
+	g->bytes += (size_t)g->bvh.n_nodes4 * sizeof(struct bvh4) +
+		    (size_t)((inst_only ? 0 : n_bounded) + n_unb) * sizeof(uint32_t);
+	A->st.n_nodes += g->bvh.n_nodes4;
+	A->st.bytes += g->bytes;
+	free(perm);
+	free(all);
+	free(boxes);
+	return g;
+oom:
+	scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
+fail:
+	free(rb.ref);
+	free(rb.box);
+	free(perm);
+	free(all);
+	free(boxes);
+	group_free(g);
+	return NULL;
+}
+
+/*
+ * Rejects graphs the tracer's recursion would not survive: CSG nesting over
+ * LIM_CSG_DEPTH or define nesting over LIM_DEFINE_DEPTH. Children always
+ * have smaller indices, so one forward pass computes every depth.
+ */
+static int check_depths(const struct scene *s, struct scene_error *err)
+{
+	uint16_t *cd = calloc((size_t)s->n_objects + 1, sizeof *cd);
+	uint16_t *dd = calloc((size_t)s->n_objects + 1, sizeof *dd);
+	int32_t *def_cd = malloc(((size_t)s->n_defines + 1) * sizeof *def_cd);
+	int32_t *def_dd = malloc(((size_t)s->n_defines + 1) * sizeof *def_dd);
+	int rc = 0;
+	if (!cd || !dd || !def_cd || !def_dd) {
+		rc = scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
+		goto out;
+	}
+	for (uint32_t i = 0; i < s->n_defines; i++)
+		def_cd[i] = def_dd[i] = -1;
+	for (uint32_t i = 0; i < s->n_objects; i++) {
+		const struct scene_object *o = &s->objects[i];
+		unsigned c = 0, d = 0;
+		if (o->kind == PRIM_CSG) {
+			uint32_t a = o->u.csg.operand1, b = o->u.csg.operand2;
+			c = 1u + (cd[a] > cd[b] ? cd[a] : cd[b]);
+			d = dd[a] > dd[b] ? dd[a] : dd[b];
+		} else if (o->kind == PRIM_INSTANCE) {
+			uint32_t df = o->u.instance.define;
+			if (def_cd[df] < 0) {
+				unsigned mc = 0, md = 0;
+				const struct scene_define *D = &s->defines[df];
+				for (uint32_t k = 0; k < D->n_objects; k++) {
+					uint32_t m = D->objects[k];
+					mc = cd[m] > mc ? cd[m] : mc;
+					md = dd[m] > md ? dd[m] : md;
+				}
+				def_cd[df] = (int32_t)mc;
+				def_dd[df] = (int32_t)md;
+			}
+			c = (unsigned)def_cd[df];
+			d = 1u + (unsigned)def_dd[df];
+		}
+		if (c > LIM_CSG_DEPTH || d > LIM_DEFINE_DEPTH) {
+			const char *f = o->loc.file ? o->loc.file : "<scene>";
+			rc = scene_errorf(err, ERRLEVEL_FATAL, "%s:%d:%d: error: %s nested deeper than %d", f,
+					  o->loc.line, o->loc.col, c > LIM_CSG_DEPTH ? "csg" : "definition",
+					  c > LIM_CSG_DEPTH ? LIM_CSG_DEPTH : LIM_DEFINE_DEPTH);
+			goto out;
+		}
+		cd[i] = (uint16_t)c;
+		dd[i] = (uint16_t)d;
+	}
+out:
+	free(cd);
+	free(dd);
+	free(def_cd);
+	free(def_dd);
+	return rc;
+}
+
+int accel_build(const struct scene *s, struct accel **out, struct scene_error *err)
+{
+	struct timespec t0, t1;
+	clock_gettime(CLOCK_MONOTONIC, &t0);
+	*out = NULL;
+	int rc = check_depths(s, err);
+	if (rc)
+		return rc;
+	struct accel *A = calloc(1, sizeof *A);
+	if (!A)
+		return scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
+	A->s = s;
+	A->dgroup = calloc((size_t)s->n_defines + 1, sizeof *A->dgroup);
+	if (!A->dgroup) {
+		accel_free(A);
+		return scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
+	}
+	A->st.bytes = sizeof *A + (size_t)s->n_defines * sizeof(void *);
+	A->st.instance_bytes = sizeof(struct ginst);
+	A->root = build_group(A, s->roots, s->n_roots, err);
+	if (!A->root) {
+		accel_free(A);
+		return err ? err->level : ERRLEVEL_FATAL;
+	}
+	clock_gettime(CLOCK_MONOTONIC, &t1);
+	A->st.build_seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+	*out = A;
+	return 0;
+}
