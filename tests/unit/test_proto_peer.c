@@ -39,6 +39,69 @@
 
 static char port[16];
 
+/* A worker started for one test, with its own port file. */
+struct test_worker {
+	pid_t pid;
+	char pf[64];
+	char saved[16]; /* the port `port` held before */
+};
+
+/*
+ * Starts bin/portray-worker on 127.0.0.1:0 with `-j threads` and the extra
+ * arguments (NULL-terminated), stderr to /dev/null, at most max_fds open
+ * descriptors when max_fds > 0; waits for its port file and points `port`
+ * (which dial() and hello() use) at it. Returns 0, or -1 when the worker
+ * reported no port. worker_stop() ends it and restores `port`.
+ */
+static int worker_start(struct test_worker *w, int max_fds, const char *threads, const char *const *extra)
+{
+	snprintf(w->pf, sizeof w->pf, "/tmp/portray-peer-XXXXXX");
+	int fd = mkstemp(w->pf);
+	if (fd >= 0)
+		close(fd);
+	unlink(w->pf);
+	const char *argv[32] = { "portray-worker", "--listen", "127.0.0.1:0", "--port-file", w->pf, "-j", threads };
+	int n = 7;
+	for (int i = 0; extra && extra[i] && n < 31; i++)
+		argv[n++] = extra[i];
+	w->pid = fork();
+	if (w->pid == 0) {
+		if (max_fds > 0) {
+			struct rlimit rl = { (rlim_t)max_fds, (rlim_t)max_fds };
+			setrlimit(RLIMIT_NOFILE, &rl);
+		}
+		int null = open("/dev/null", O_WRONLY);
+		dup2(null, 2);
+		close(null);
+		execv("bin/portray-worker", (char *const *)argv);
+		_exit(127);
+	}
+	memcpy(w->saved, port, sizeof w->saved);
+	port[0] = 0;
+	for (int i = 0; i < 200 && !port[0]; i++) {
+		FILE *f = fopen(w->pf, "r");
+		if (f) {
+			if (fscanf(f, "%15s", port) != 1)
+				port[0] = 0;
+			fclose(f);
+		}
+		if (!port[0])
+			usleep(20000);
+	}
+	return port[0] ? 0 : -1;
+}
+
+/* SIGTERM, reap (checking a clean exit 0), remove the port file, restore `port`. */
+static void worker_stop(struct test_worker *w)
+{
+	int st = -1;
+	kill(w->pid, SIGTERM);
+	waitpid(w->pid, &st, 0);
+	CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+	unlink(w->pf);
+	memcpy(port, w->saved, sizeof port);
+}
+
 static struct proto_conn *dial(void)
 {
 	char err[300];
@@ -157,35 +220,9 @@ static long cpu_ticks(pid_t pid)
  */
 static void test_out_of_fds(void)
 {
-	char pf2[] = "/tmp/portray-peer-fds-XXXXXX";
-	int fd = mkstemp(pf2);
-	close(fd);
-	unlink(pf2);
-	pid_t pid = fork();
-	if (pid == 0) {
-		struct rlimit rl = { 16, 16 };
-		setrlimit(RLIMIT_NOFILE, &rl);
-		int null = open("/dev/null", O_WRONLY);
-		dup2(null, 2);
-		close(null);
-		execl("bin/portray-worker", "portray-worker", "--listen", "127.0.0.1:0", "--port-file", pf2, "-j", "1",
-		      (char *)NULL);
-		_exit(127);
-	}
-	char saved[16];
-	memcpy(saved, port, sizeof saved);
-	port[0] = 0;
-	for (int i = 0; i < 200 && !port[0]; i++) {
-		FILE *f = fopen(pf2, "r");
-		if (f) {
-			if (fscanf(f, "%15s", port) != 1)
-				port[0] = 0;
-			fclose(f);
-		}
-		if (!port[0])
-			usleep(20000);
-	}
-	CHECK(port[0] != 0);
+	struct test_worker w;
+	CHECK(worker_start(&w, 16, "1", NULL) == 0);
+	pid_t pid = w.pid;
 	enum { N = 40 };
 	struct proto_conn *cs[N];
 	for (int i = 0; i < N; i++)
@@ -208,12 +245,7 @@ static void test_out_of_fds(void)
 	}
 	CHECK(c != NULL);
 	proto_conn_free(c);
-	kill(pid, SIGTERM);
-	int st = -1;
-	waitpid(pid, &st, 0);
-	CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0);
-	unlink(pf2);
-	memcpy(port, saved, sizeof saved);
+	worker_stop(&w);
 }
 
 /*
@@ -224,36 +256,13 @@ static void test_out_of_fds(void)
  */
 static void test_secret_first(void)
 {
-	char pf2[] = "/tmp/portray-peer-sec-XXXXXX", sf[] = "/tmp/portray-peer-key-XXXXXX";
-	int fd = mkstemp(pf2);
-	close(fd);
-	unlink(pf2);
-	fd = mkstemp(sf);
+	char sf[] = "/tmp/portray-peer-key-XXXXXX";
+	int fd = mkstemp(sf);
 	CHECK(fd >= 0 && write(fd, "k3y\n", 4) == 4);
 	close(fd);
-	pid_t pid = fork();
-	if (pid == 0) {
-		int null = open("/dev/null", O_WRONLY);
-		dup2(null, 2);
-		close(null);
-		execl("bin/portray-worker", "portray-worker", "--listen", "127.0.0.1:0", "--port-file", pf2, "-j", "1",
-		      "--secret-file", sf, (char *)NULL);
-		_exit(127);
-	}
-	char saved[16];
-	memcpy(saved, port, sizeof saved);
-	port[0] = 0;
-	for (int i = 0; i < 200 && !port[0]; i++) {
-		FILE *f = fopen(pf2, "r");
-		if (f) {
-			if (fscanf(f, "%15s", port) != 1)
-				port[0] = 0;
-			fclose(f);
-		}
-		if (!port[0])
-			usleep(20000);
-	}
-	CHECK(port[0] != 0);
+	const char *const extra[] = { "--secret-file", sf, NULL };
+	struct test_worker w;
+	CHECK(worker_start(&w, 0, "1", extra) == 0);
 	struct proto_msg m;
 	uint8_t hash[32] = { 3 }, chunk[2000] = { 0 };
 	for (int round = 0; round < 4; round++) {
@@ -297,13 +306,8 @@ static void test_secret_first(void)
 		}
 		proto_conn_free(c);
 	}
-	kill(pid, SIGTERM);
-	int st = -1;
-	waitpid(pid, &st, 0);
-	CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0);
-	unlink(pf2);
+	worker_stop(&w);
 	unlink(sf);
-	memcpy(port, saved, sizeof saved);
 }
 
 /*
@@ -313,33 +317,9 @@ static void test_secret_first(void)
  */
 static void test_slow_handshake(void)
 {
-	char pf2[] = "/tmp/portray-peer-slow-XXXXXX";
-	int fd = mkstemp(pf2);
-	close(fd);
-	unlink(pf2);
-	pid_t pid = fork();
-	if (pid == 0) {
-		int null = open("/dev/null", O_WRONLY);
-		dup2(null, 2);
-		close(null);
-		execl("bin/portray-worker", "portray-worker", "--listen", "127.0.0.1:0", "--port-file", pf2, "-j", "1",
-		      "--test-handshake-ms", "1000", (char *)NULL);
-		_exit(127);
-	}
-	char saved[16];
-	memcpy(saved, port, sizeof saved);
-	port[0] = 0;
-	for (int i = 0; i < 200 && !port[0]; i++) {
-		FILE *f = fopen(pf2, "r");
-		if (f) {
-			if (fscanf(f, "%15s", port) != 1)
-				port[0] = 0;
-			fclose(f);
-		}
-		if (!port[0])
-			usleep(20000);
-	}
-	CHECK(port[0] != 0);
+	const char *const extra[] = { "--test-handshake-ms", "1000", NULL };
+	struct test_worker w;
+	CHECK(worker_start(&w, 0, "1", extra) == 0);
 	struct proto_conn *c = dial();
 	CHECK(c != NULL);
 	struct proto_msg m;
@@ -367,12 +347,7 @@ static void test_slow_handshake(void)
 	}
 	CHECK(got_error);
 	proto_conn_free(c);
-	kill(pid, SIGTERM);
-	int st = -1;
-	waitpid(pid, &st, 0);
-	CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0);
-	unlink(pf2);
-	memcpy(port, saved, sizeof saved);
+	worker_stop(&w);
 }
 
 /* Resident memory of process pid in KiB (Linux /proc), or -1. */
@@ -462,30 +437,12 @@ static void test_back_pressure(pid_t pid)
 int main(void)
 {
 	signal(SIGPIPE, SIG_IGN);
-	char pf[] = "/tmp/portray-peer-XXXXXX";
-	int pfd = mkstemp(pf);
-	close(pfd);
-	unlink(pf);
-	pid_t pid = fork();
-	if (pid == 0) {
-		int null = open("/dev/null", O_WRONLY);
-		dup2(null, 2);
-		execl("bin/portray-worker", "portray-worker", "--listen", "127.0.0.1:0", "--port-file", pf, "-j", "2",
-		      "--cache-mb", "1", (char *)NULL);
-		_exit(127);
-	}
-	for (int i = 0; i < 200; i++) {
-		FILE *f = fopen(pf, "r");
-		if (f) {
-			int ok = fscanf(f, "%15s", port) == 1;
-			fclose(f);
-			if (ok)
-				break;
-		}
-		usleep(20000);
-	}
-	CHECK(port[0] != 0);
-	if (!port[0]) {
+	const char *const extra[] = { "--cache-mb", "1", NULL };
+	struct test_worker main_worker;
+	int started = worker_start(&main_worker, 0, "2", extra);
+	pid_t pid = main_worker.pid;
+	CHECK(started == 0);
+	if (started != 0) {
 		kill(pid, SIGKILL);
 		TEST_MAIN_END();
 	}
@@ -661,10 +618,6 @@ int main(void)
 	renderer_free(r);
 	free(enc);
 	scene_free(s);
-	kill(pid, SIGTERM);
-	int st = -1;
-	waitpid(pid, &st, 0);
-	CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0);
-	unlink(pf);
+	worker_stop(&main_worker);
 	TEST_MAIN_END();
 }
