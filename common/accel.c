@@ -90,9 +90,9 @@ static void trace_init(struct trace *r, vec3 o, vec3 d, double tmin, double tmax
 
 struct ray4 {
 #if defined(__SSE2__)
-	__m128 o[3], inv[3];
+	__m128 o[3], inv_near[3], inv_far[3];
 #else
-	float o[3], inv[3];
+	float o[3], inv_near[3], inv_far[3];
 #endif
 	/* the direction's octant: bit k set when d[k] is negative (its sign
 	 * bit, -0 included: the sign of inv[k]); picks the near plane of each
@@ -136,29 +136,48 @@ static inline void ray4_init(struct ray4 *q, const struct trace *r, vec3 center)
 	double d[3] = { r->d.x, r->d.y, r->d.z };
 	for (uint32_t k = 0; k < 3; k++) {
 		double dk = d[k] * s;
-		float iv = (float)(fabs(dk) > 1e-30 ? 1.0 / dk : copysign(1e30, dk));
+		double iv = fabs(dk) > 1e-30 ? 1.0 / dk : copysign(1e30, dk);
+		/* the widening, folded into the inverse (BOX TESTS, accel_int.h) */
+		float iv_near = (float)(iv * (1 - BOX_WIDEN)), iv_far = (float)(iv * (1 + BOX_WIDEN));
 #if defined(__SSE2__)
 		q->o[k] = _mm_set1_ps((float)o[k]);
-		q->inv[k] = _mm_set1_ps(iv);
+		q->inv_near[k] = _mm_set1_ps(iv_near);
+		q->inv_far[k] = _mm_set1_ps(iv_far);
 #else
 		q->o[k] = (float)o[k];
-		q->inv[k] = iv;
+		q->inv_near[k] = iv_near;
+		q->inv_far[k] = iv_far;
 #endif
 	}
 }
 
 /*
- * Slab test of the four children of nd against [tmin, tmax] (box space).
- * Returns a mask (bit c: child c may be hit) and the widened entry
- * distances in tn.
+ * The box tests' tmin and tmax: x >= 0 rounded to a float, down for tmin
+ * and up for tmax, without a branch (tmax changes at every leaf that hits,
+ * and a data-dependent branch there costs more than the box test). The
+ * factor covers float rounding's relative error (2^-24) of normal values
+ * and the tiny term its absolute error (2^-150) of subnormal ones; inf
+ * stays inf. A tmin below 0 by the tiny term only lets a box through.
+ */
+static inline float box_tmin(double x) { return (float)(x * (1 - 0x1p-22) - 0x1p-140); }
+static inline float box_tmax(double x) { return (float)(x * (1 + 0x1p-22) + 0x1p-140); }
+
+/*
+ * Slab test of the four children of nd against [tmin, tmax] (box space,
+ * tmin >= 0). Returns a mask (bit c: child c may be hit) and the widened
+ * entry distances in tn.
  *
  * The near plane of each axis is chosen once per ray by the direction's
- * sign (ray4.near/far). This is exactly the old min/max form: inv is never
- * 0, inf or NaN, and lo <= hi, so (lo - o) * inv and (hi - o) * inv are
- * ordered by inv's sign (rounding is monotonic); min/max would pick the
- * same values (up to the sign of a zero, which no comparison sees). NaN
- * bounds (unused slots) never hit: max returns its second operand when one
- * is NaN, as SSE's does, so t0 becomes NaN and t0 <= t1 fails.
+ * sign (the "sign" trick): inv is never 0, inf or NaN, and lo <= hi, so
+ * (lo - o) * inv and (hi - o) * inv are ordered by inv's sign (rounding is
+ * monotonic). Each entry distance is multiplied by 1 - BOX_WIDEN and each
+ * exit distance by 1 + BOX_WIDEN through the inverses (ray4_init): an
+ * entry distance that matters is >= tmin >= 0, so that moves it toward 0,
+ * and an exit distance that matters is >= 0, so that moves it away; a
+ * negative one belongs to a box behind the origin by more than the
+ * padding. NaN bounds (unused slots) never hit: max returns its second
+ * operand when one is NaN, as SSE's does, so t0 becomes NaN and t0 <= t1
+ * fails.
  */
 #if defined(__SSE2__)
 typedef __m128 tspan; /* tmin or tmax broadcast to the four lanes */
@@ -178,14 +197,11 @@ static inline __attribute__((always_inline)) int node4_hit(const struct bvh4 *nd
 #if defined(__SSE2__)
 	__m128 t0 = tmin, t1 = tmax;
 	for (int k = 0; k < 3; k++) {
-		__m128 tnear = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + near[k]), q->o[k]), q->inv[k]);
-		__m128 tfar = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + far[k]), q->o[k]), q->inv[k]);
+		__m128 tnear = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + near[k]), q->o[k]), q->inv_near[k]);
+		__m128 tfar = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + far[k]), q->o[k]), q->inv_far[k]);
 		t0 = _mm_max_ps(t0, tnear);
 		t1 = _mm_min_ps(t1, tfar);
 	}
-	const __m128 absmask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff)), w = _mm_set1_ps(BOX_WIDEN);
-	t0 = _mm_sub_ps(t0, _mm_mul_ps(_mm_and_ps(t0, absmask), w));
-	t1 = _mm_add_ps(t1, _mm_mul_ps(_mm_and_ps(t1, absmask), w));
 	_mm_storeu_ps(tn, t0);
 	return _mm_movemask_ps(_mm_cmple_ps(t0, t1));
 #else
@@ -193,13 +209,11 @@ static inline __attribute__((always_inline)) int node4_hit(const struct bvh4 *nd
 	for (int c = 0; c < 4; c++) {
 		float t0 = tmin, t1 = tmax;
 		for (int k = 0; k < 3; k++) {
-			float tnear = (b[near[k] + (uint32_t)c] - q->o[k]) * q->inv[k];
-			float tfar = (b[far[k] + (uint32_t)c] - q->o[k]) * q->inv[k];
+			float tnear = (b[near[k] + (uint32_t)c] - q->o[k]) * q->inv_near[k];
+			float tfar = (b[far[k] + (uint32_t)c] - q->o[k]) * q->inv_far[k];
 			t0 = t0 > tnear ? t0 : tnear; /* _mm_max_ps(t0, tnear) */
 			t1 = t1 < tfar ? t1 : tfar;   /* _mm_min_ps(t1, tfar) */
 		}
-		t0 -= fabsf(t0) * BOX_WIDEN;
-		t1 += fabsf(t1) * BOX_WIDEN;
 		tn[c] = t0;
 		mask |= (t0 <= t1) << c;
 	}
@@ -627,8 +641,8 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 	bool found = false;
 	const struct bvh4 *nodes = g->bvh.nodes;
 	const struct ray4 q = *qp;
-	const tspan tmin = tspan_of((float)(r->tmin * q.tscale));
-	float tmax = (float)(r->tmax * q.tscale);
+	const tspan tmin = tspan_of(box_tmin(r->tmin * q.tscale));
+	float tmax = box_tmax(r->tmax * q.tscale);
 	tspan tmax4 = tspan_of(tmax);
 	struct {
 		uint32_t idx, n;
@@ -640,7 +654,7 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 		if (n) {
 			for (uint32_t k = 0; k < n; k++)
 				found |= ref_test(A, g, group_ref(g, idx + k), r, best, false);
-			tmax = (float)(r->tmax * q.tscale);
+			tmax = box_tmax(r->tmax * q.tscale);
 			tmax4 = tspan_of(tmax);
 		} else {
 			const struct bvh4 *nd = &nodes[idx];
@@ -758,7 +772,7 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 	const struct bvh4 *nodes = g->bvh.nodes;
 	struct ray4 q;
 	ray4_init(&q, r, g->center);
-	const tspan tmin = tspan_of((float)(r->tmin * q.tscale)), tmax = tspan_of((float)(r->tmax * q.tscale));
+	const tspan tmin = tspan_of(box_tmin(r->tmin * q.tscale)), tmax = tspan_of(box_tmax(r->tmax * q.tscale));
 	struct {
 		uint32_t idx, n;
 	} stack[3 * BVH_MAX_DEPTH + 4];
@@ -806,12 +820,16 @@ static inline bool ray_ok(const struct ray *r)
 	return z == 0 && v3_dot(r->d, r->d) > 0 && r->tmin < r->tmax;
 }
 
+/* The ray's tmin, 0 when negative: rays are half-lines (the box tests
+ * rely on tmin >= 0). */
+static inline double ray_tmin(const struct ray *r) { return r->tmin > 0 ? r->tmin : 0; }
+
 bool accel_intersect(const struct accel *a, const struct ray *r, struct hit *h)
 {
 	if (!a->root || !ray_ok(r))
 		return false;
 	struct trace t;
-	trace_init(&t, r->o, r->d, r->tmin, r->tmax);
+	trace_init(&t, r->o, r->d, ray_tmin(r), r->tmax);
 	return group_hit(a, a->root, &t, h, false);
 }
 
@@ -820,7 +838,7 @@ bool accel_intersect_brute(const struct accel *a, const struct ray *r, struct hi
 	if (!a->root || !ray_ok(r))
 		return false;
 	struct trace t;
-	trace_init(&t, r->o, r->d, r->tmin, r->tmax);
+	trace_init(&t, r->o, r->d, ray_tmin(r), r->tmax);
 	return group_hit(a, a->root, &t, h, true);
 }
 
@@ -829,7 +847,7 @@ bool accel_occluded(const struct accel *a, const struct ray *r)
 	if (!a->root || !ray_ok(r))
 		return false;
 	struct trace t;
-	trace_init(&t, r->o, r->d, r->tmin, r->tmax);
+	trace_init(&t, r->o, r->d, ray_tmin(r), r->tmax);
 	return group_occluded(a, a->root, &t);
 }
 

@@ -21,7 +21,8 @@
 
 struct ray {
 	vec3 o, d;         /* origin and direction (need not be unit length) */
-	double tmin, tmax; /* hits accepted with tmin < t < tmax */
+	double tmin, tmax; /* hits accepted with tmin < t < tmax; a ray is a half-line:
+			      a negative tmin counts as 0 */
 };
 
 struct accel;

@@ -115,12 +115,17 @@ static inline vec3 tri_normal(const struct gmesh *m, const uint32_t *ix)
  * before the build. The ray's origin is taken relative to the centre (in
  * double), its direction scaled exactly by a power of two so that the
  * largest component is in [1, 2) (t scales by the same power), then both
- * are rounded to float. Errors: the origin's rounding moves it by at most
- * 2^-24 |o|: when |o| <= 2M that is below the padding; when |o| > 2M it is
- * at most 2^-23 of the distance to the box, covered by widening every
- * entry/exit distance by BOX_WIDEN relative (which also covers the rounding
- * of the subtraction, of the inverse and of the product, and of tmin/tmax
- * to float). Zero direction components get an inverse of +-1e30 (never
+ * are rounded to float. Errors: the origin's rounding moves each component
+ * k by at most 2^-24 |o_k|: when |o_k| <= 2M that is below the padding;
+ * when |o_k| > 2M it is at most 2^-23 of the distance to the slab, covered
+ * by widening every entry/exit distance by BOX_WIDEN relative (which also
+ * covers the rounding of the subtraction, of the inverse and of the
+ * product). The widening is folded into the inverses: entry distances use
+ * inv * (1 - BOX_WIDEN), exit distances inv * (1 + BOX_WIDEN) (rounded to
+ * float: one more 2^-24), which moves an entry distance >= 0 toward 0 and
+ * an exit distance >= 0 away from it; rays are half-lines (tmin >= 0), so
+ * only those matter. The interval's own ends, tmin and tmax, are rounded to
+ * float outward. Zero direction components get an inverse of +-1e30 (never
  * inf, so never inf * 0 = NaN); the padding keeps that exact enough.
  * Primitive tests stay in double, so a box test can only let through more,
  * never cull a true hit: BVH and brute force give the same answers

@@ -278,6 +278,12 @@ static void mp_owner(void)
 	CHECK(accel_intersect(a, &r3, &h));
 	CHECK_NEAR(h.t, 6, 1e-6);
 	CHECK_NEAR(h.n.z, 1, 1e-6);
+	/* a ray is a half-line: a negative tmin counts as 0 (nothing behind) */
+	struct ray r4 = { v3(11, 0, 5), v3(0, 0, 1), -100, INFINITY };
+	CHECK(!accel_intersect(a, &r4, &h) && !accel_occluded(a, &r4) && !accel_intersect_brute(a, &r4, &h));
+	struct ray r5 = { v3(11, 0, -5), v3(0, 0, 1), -100, INFINITY };
+	CHECK(accel_intersect(a, &r5, &h));
+	CHECK_NEAR(h.t, 4, 1e-6);
 	/* bad rays never hit */
 	struct ray bad1 = { v3(11, 0, -5), v3(0, 0, 0), 0, INFINITY };
 	struct ray bad2 = { v3(NAN, 0, -5), v3(0, 0, 1), 0, INFINITY };
