@@ -95,7 +95,7 @@ struct ray4 {
 	float o[3], inv_near[3], inv_far[3];
 #endif
 	/* the direction's octant: bit k set when d[k] is negative (its sign
-	 * bit, -0 included: the sign of inv[k]); picks the near plane of each
+	 * bit, -0 included: the sign of the inverses); picks the near plane of each
 	 * axis (hi[k] for a negative direction, lo[k] else), the "sign" trick */
 	uint32_t oct;
 	double tscale; /* box-space t = ray t * tscale */
