@@ -249,6 +249,46 @@ struct cand {
 	struct hit sub; /* instances and CSG: the finished hit in the group's space */
 };
 
+/*
+ * CANONICAL TIES. The closest hit is the least (t, reference) pair: at equal
+ * t the lower reference wins. So the hit never depends on the order in which
+ * references are tested, and a traversal may visit the tree in any order
+ * (packets, accel_intersect4) and still give every ray the same hit bit for
+ * bit. Primitive tests accept t < r->tmax and report a primitive's first
+ * hit after tmin whatever tmax is; after a hit at t, r->tmax is the next
+ * double above t, so a later hit at the same t still reaches cand_take,
+ * which keeps the lower reference.
+ */
+static inline void cand_init(struct cand *c)
+{
+	c->ref = UINT32_MAX;
+	c->t = INFINITY;
+}
+
+/* The next double above t > 0 (finite): t's bits plus one. */
+static inline double next_up(double t)
+{
+	uint64_t bits;
+	memcpy(&bits, &t, sizeof bits);
+	bits++;
+	memcpy(&t, &bits, sizeof t);
+	return t;
+}
+
+/* Whether a hit of ref at t beats *c (canonical ties). */
+static inline bool cand_better(const struct cand *c, uint32_t ref, double t)
+{
+	return t < c->t || (t == c->t && ref < c->ref);
+}
+
+/* Records a hit of ref at t that beats *c and narrows r to admit its ties. */
+static inline void cand_take(struct cand *c, struct trace *r, uint32_t ref, double t)
+{
+	c->ref = ref;
+	c->t = t;
+	r->tmax = next_up(t);
+}
+
 static bool group_hit(const struct accel *A, const struct group *g, struct trace *r, struct hit *h, bool brute);
 static bool group_occluded(const struct accel *A, const struct group *g, struct trace *r);
 static void surface_complete(const struct scene *s, struct hit *h);
@@ -347,12 +387,10 @@ static __attribute__((noinline)) bool xprim_test(const struct geom_obj *go, uint
 	}
 	double t;
 	int part;
-	if (!geom_intersect(go, o, d, r->tmin, r->tmax, &t, &part))
+	if (!geom_intersect(go, o, d, r->tmin, r->tmax, &t, &part) || !cand_better(c, ref, t))
 		return false;
 	c->part = part;
-	c->ref = ref;
-	c->t = t;
-	r->tmax = t;
+	cand_take(c, r, ref, t);
 	return true;
 }
 
@@ -369,22 +407,24 @@ static __attribute__((noinline)) bool ref_test_slow(const struct accel *A, const
 		if (!csg_hit(A->s, (struct geom_obj *const *)A->gobj, x->obj, r->o, r->d, r->tmin, r->tmax, &hh))
 			return false;
 		t = hh.t;
+		if (!cand_better(c, ref, t))
+			return false;
 		c->sub = hh;
 	} else {
 		struct hit hh;
 		if (!inst_hit(A, &g->inst[i], r, &hh, brute))
 			return false;
 		t = hh.t;
+		if (!cand_better(c, ref, t))
+			return false;
 		c->sub = hh;
 	}
-	c->ref = ref;
-	c->t = t;
-	r->tmax = t;
+	cand_take(c, r, ref, t);
 	return true;
 }
 
-/* Tests one reference; on a hit closer than r->tmax records it in *c and
- * shrinks r->tmax. */
+/* Tests one reference; on a hit in (r->tmin, r->tmax) that beats *c
+ * (CANONICAL TIES) records it in *c and narrows r->tmax. */
 static inline __attribute__((always_inline)) bool ref_test(const struct accel *A, const struct group *g,
 							    uint32_t ref, struct trace *r, struct cand *c, bool brute)
 {
@@ -392,14 +432,16 @@ static inline __attribute__((always_inline)) bool ref_test(const struct accel *A
 	double t;
 	switch (REF_KIND(ref)) {
 	case REF_SPHERE:
-		if (!sphere_test(&g->sph[i], r, &t))
+		if (!sphere_test(&g->sph[i], r, &t) || !cand_better(c, ref, t))
 			return false;
 		break;
 	case REF_TRI: {
 		const struct gmesh *m = &g->mesh[g->tri[i].mesh];
 		const uint32_t *ix = tri_ix(m, g->tri[i].tri);
 		double b1, b2;
-		if (!geom_tri_hit_p(trace_wray(r), &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2))
+		if (!geom_tri_hit_p(trace_wray(r), &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &t, &b1,
+				    &b2) ||
+		    !cand_better(c, ref, t))
 			return false;
 		c->b1 = b1;
 		c->b2 = b2;
@@ -414,9 +456,7 @@ static inline __attribute__((always_inline)) bool ref_test(const struct accel *A
 	default:
 		return ref_test_slow(A, g, ref, r, c, brute);
 	}
-	c->ref = ref;
-	c->t = t;
-	r->tmax = t;
+	cand_take(c, r, ref, t);
 	return true;
 }
 
@@ -427,6 +467,7 @@ static inline bool ref_occludes(const struct accel *A, const struct group *g, ui
 	if (REF_KIND(ref) == REF_INST)
 		return inst_occluded(A, &g->inst[i], r);
 	struct cand c;
+	cand_init(&c);
 	double tmax = r->tmax;
 	bool hit = ref_test(A, g, ref, r, &c, false);
 	r->tmax = tmax;
@@ -583,9 +624,9 @@ static __attribute__((noinline)) bool unb_hit(const struct accel *A, const struc
 		const struct geom_obj *go = REF_KIND(ref) == REF_XPRIM ? g->xp[REF_IDX(ref)].g : NULL;
 		if (go && go->kind == PRIM_PLANE && !go->has_xform) { /* geom_intersect's plane test, inline */
 			double t;
-			if (geom_plane_t(go->u.pl.pos, go->u.pl.n, r->o, r->d, &t) && t > r->tmin && t < r->tmax) {
-				best->ref = ref;
-				best->t = r->tmax = t;
+			if (geom_plane_t(go->u.pl.pos, go->u.pl.n, r->o, r->d, &t) && t > r->tmin && t < r->tmax &&
+			    cand_better(best, ref, t)) {
+				cand_take(best, r, ref, t);
 				best->part = GEOM_PART_MAIN;
 				found = true;
 			}
@@ -604,9 +645,8 @@ static __attribute__((noinline)) bool brute_hit(const struct accel *A, const str
 	bool found = false;
 	for (uint32_t k = 0; k < g->n_sph; k++) {
 		double t;
-		if (sphere_test(&g->sph[k], r, &t)) {
-			best->ref = REF_MAKE(REF_SPHERE, k);
-			best->t = r->tmax = t;
+		if (sphere_test(&g->sph[k], r, &t) && cand_better(best, REF_MAKE(REF_SPHERE, k), t)) {
+			cand_take(best, r, REF_MAKE(REF_SPHERE, k), t);
 			found = true;
 		}
 	}
@@ -616,9 +656,9 @@ static __attribute__((noinline)) bool brute_hit(const struct accel *A, const str
 		for (; k < g->n_tri && g->tri[k].mesh == mi; k++) {
 			const uint32_t *ix = tri_ix(m, g->tri[k].tri);
 			double t, b1, b2;
-			if (geom_tri_hit(trace_wray(r), m->v[ix[0]], m->v[ix[1]], m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2)) {
-				best->ref = REF_MAKE(REF_TRI, k);
-				best->t = r->tmax = t;
+			if (geom_tri_hit(trace_wray(r), m->v[ix[0]], m->v[ix[1]], m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2) &&
+			    cand_better(best, REF_MAKE(REF_TRI, k), t)) {
+				cand_take(best, r, REF_MAKE(REF_TRI, k), t);
 				best->b1 = b1;
 				best->b2 = b2;
 				found = true;
@@ -717,13 +757,13 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 static bool group_hit(const struct accel *A, const struct group *g, struct trace *r, struct hit *h, bool brute)
 {
 	struct cand best;
+	cand_init(&best);
 	bool found = false;
 	if (g->plane1) { /* unb_hit's plane test, the common case of one ground plane */
 		double t;
 		const struct geom_obj *go = g->plane1;
 		if (geom_plane_t(go->u.pl.pos, go->u.pl.n, r->o, r->d, &t) && t > r->tmin && t < r->tmax) {
-			best.ref = g->unb[0];
-			best.t = r->tmax = t;
+			cand_take(&best, r, g->unb[0], t);
 			best.part = GEOM_PART_MAIN;
 			found = true;
 		}
