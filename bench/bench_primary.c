@@ -1,13 +1,16 @@
 /*
  * bench_primary.c - the A/B figure for work on the tracing core: primary
  * rays (camera ray + closest hit, no shading) through every pixel centre,
- * one thread, the same frame traced FRAMES times; prints the best frame's
+ * traced as the renderer traces them (2x2 blocks of pixels through
+ * accel_intersect4; --single: one accel_intersect per ray), one thread, the
+ * same frame traced FRAMES times; prints the best frame's
  * rate in Mrays/s of thread CPU time (repeatable to ~0.5% where the
  * wall-clock figures of bench_render wander by ~5%) and a hash of every hit
  * (t, object, normals), which shows whether a change kept each hit bit for
- * bit. docs/performance.md says how to use it.
+ * bit; it also checks that both ways give that same hash. docs/performance.md
+ * says how to use it.
  *
- *   bench_primary [SCENE [FRAMES [WIDTHxHEIGHT]]]
+ *   bench_primary [--single] [SCENE [FRAMES [WIDTHxHEIGHT]]]
  *
  * Defaults: tests/data/spd/balls_s4.sce, 15 frames, 1280x960 (the issue 3
  * target's scene and size). Not a test: prints figures only.
@@ -40,8 +43,19 @@ static uint64_t fnv(uint64_t h, const void *p, size_t n)
 	return h;
 }
 
-/* One frame; the hash of its hits when hash is not NULL. */
-static void frame(const struct accel *a, const struct cam *c, uint64_t *hash)
+static uint64_t hash_hit(uint64_t h64, bool hit, const struct hit *h)
+{
+	if (!hit)
+		return fnv(h64, "-", 1);
+	h64 = fnv(h64, &h->t, sizeof h->t);
+	h64 = fnv(h64, &h->object, sizeof h->object);
+	h64 = fnv(h64, &h->n, sizeof h->n);
+	return fnv(h64, &h->ng, sizeof h->ng);
+}
+
+/* One frame of single rays; the hash of its hits (row by row) when hash is
+ * not NULL. */
+static void frame_single(const struct accel *a, const struct cam *c, uint64_t *hash)
 {
 	uint64_t h64 = 1469598103934665603ull;
 	for (uint32_t y = 0; y < c->h; y++)
@@ -49,28 +63,61 @@ static void frame(const struct accel *a, const struct cam *c, uint64_t *hash)
 			struct ray r = cam_ray(c, x + 0.5, y + 0.5);
 			struct hit h;
 			bool hit = accel_intersect(a, &r, &h);
+			if (hash)
+				h64 = hash_hit(h64, hit, &h);
+		}
+	if (hash)
+		*hash = h64;
+}
+
+/* The same frame in 2x2 blocks, as the renderer traces it (a block past
+ * the image's edge repeats its last row or column); the same hash. */
+static void frame_packets(const struct accel *a, const struct cam *c, uint64_t *hash, struct hit *row2,
+			  bool *hit2)
+{
+	uint64_t h64 = 1469598103934665603ull;
+	for (uint32_t y = 0; y < c->h; y += 2) {
+		for (uint32_t x = 0; x < c->w; x += 2) {
+			struct ray r[4];
+			struct hit h[4];
+			bool hit[4];
+			for (uint32_t i = 0; i < 4; i++) {
+				uint32_t px = x + (i & 1), py = y + (i >> 1);
+				r[i] = cam_ray(c, (px < c->w ? px : c->w - 1) + 0.5, (py < c->h ? py : c->h - 1) + 0.5);
+			}
+			accel_intersect4(a, r, h, hit);
 			if (!hash)
 				continue;
-			if (hit) {
-				h64 = fnv(h64, &h.t, sizeof h.t);
-				h64 = fnv(h64, &h.object, sizeof h.object);
-				h64 = fnv(h64, &h.n, sizeof h.n);
-				h64 = fnv(h64, &h.ng, sizeof h.ng);
-			} else {
-				h64 = fnv(h64, "-", 1);
+			for (uint32_t i = 0; i < 4; i++) {
+				size_t k = (size_t)(i >> 1) * c->w + x + (i & 1);
+				if (x + (i & 1) < c->w) {
+					row2[k] = h[i];
+					hit2[k] = hit[i];
+				}
 			}
 		}
+		if (!hash)
+			continue;
+		for (uint32_t j = 0; j < 2 && y + j < c->h; j++)
+			for (uint32_t x = 0; x < c->w; x++)
+				h64 = hash_hit(h64, hit2[(size_t)j * c->w + x], &row2[(size_t)j * c->w + x]);
+	}
 	if (hash)
 		*hash = h64;
 }
 
 int main(int argc, char **argv)
 {
+	bool single = argc > 1 && strcmp(argv[1], "--single") == 0;
+	if (single) {
+		argc--;
+		argv++;
+	}
 	const char *path = argc > 1 ? argv[1] : "tests/data/spd/balls_s4.sce";
 	int frames = argc > 2 ? atoi(argv[2]) : 15;
 	unsigned w = 1280, h = 960;
 	if (argc > 3 && sscanf(argv[3], "%ux%u", &w, &h) != 2) {
-		fprintf(stderr, "usage: bench_primary [SCENE [FRAMES [WIDTHxHEIGHT]]]\n");
+		fprintf(stderr, "usage: bench_primary [--single] [SCENE [FRAMES [WIDTHxHEIGHT]]]\n");
 		return 64;
 	}
 	if (frames < 1 || w == 0 || h == 0 || w > 100000 || h > 100000) {
@@ -96,17 +143,31 @@ int main(int argc, char **argv)
 		scene_free(s);
 		return 1;
 	}
-	uint64_t hash = 0;
-	frame(a, &c, &hash); /* hashing costs time: a frame of its own, untimed */
+	struct hit *row2 = malloc(2 * (size_t)w * sizeof *row2);
+	bool *hit2 = malloc(2 * (size_t)w * sizeof *hit2);
+	if (!row2 || !hit2) {
+		fprintf(stderr, "bench_primary: out of memory\n");
+		return 1;
+	}
+	/* hashing costs time: frames of their own, untimed */
+	uint64_t hash = 0, hash_p = 0;
+	frame_single(a, &c, &hash);
+	frame_packets(a, &c, &hash_p, row2, hit2);
 	double best = INFINITY;
 	for (int i = 0; i < frames; i++) {
 		double t0 = cpu_now();
-		frame(a, &c, NULL);
+		if (single)
+			frame_single(a, &c, NULL);
+		else
+			frame_packets(a, &c, NULL, NULL, NULL);
 		double t = cpu_now() - t0;
 		best = t < best ? t : best;
 	}
-	printf("%s %ux%u: %.2f Mrays/s on 1 thread (best of %d frames, thread CPU time); hits hash %016llx\n", path, w,
-	       h, (double)w * h / best * 1e-6, frames, (unsigned long long)hash);
+	printf("%s %ux%u: %.2f Mrays/s on 1 thread, %s (best of %d frames, thread CPU time); hits hash %016llx%s\n",
+	       path, w, h, (double)w * h / best * 1e-6, single ? "single rays" : "2x2 packets", frames,
+	       (unsigned long long)hash, hash == hash_p ? "" : " MISMATCH: packets and single rays differ");
+	free(row2);
+	free(hit2);
 	accel_free(a);
 	scene_free(s);
 	return 0;

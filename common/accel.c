@@ -119,7 +119,16 @@ static inline double pow2(int e)
 	return x;
 }
 
-static inline void ray4_init(struct ray4 *q, const struct trace *r, vec3 center)
+/* A ray's box-test constants in float (BOX TESTS, accel_int.h): the origin
+ * relative to the group's centre and the widened inverses of the scaled
+ * direction; tscale and the octant as in struct ray4. */
+struct ray_box {
+	float o[3], inv_near[3], inv_far[3];
+	double tscale;
+	uint32_t oct;
+};
+
+static inline void ray_box_init(struct ray_box *q, const struct trace *r, vec3 center)
 {
 	double ax = fabs(r->d.x), ay = fabs(r->d.y), az = fabs(r->d.z);
 	double m = ax > ay ? ax : ay;
@@ -138,15 +147,27 @@ static inline void ray4_init(struct ray4 *q, const struct trace *r, vec3 center)
 		double dk = d[k] * s;
 		double iv = fabs(dk) > 1e-30 ? 1.0 / dk : copysign(1e30, dk);
 		/* the widening, folded into the inverse (BOX TESTS, accel_int.h) */
-		float iv_near = (float)(iv * (1 - BOX_WIDEN)), iv_far = (float)(iv * (1 + BOX_WIDEN));
-#if defined(__SSE2__)
-		q->o[k] = _mm_set1_ps((float)o[k]);
-		q->inv_near[k] = _mm_set1_ps(iv_near);
-		q->inv_far[k] = _mm_set1_ps(iv_far);
-#else
+		q->inv_near[k] = (float)(iv * (1 - BOX_WIDEN));
+		q->inv_far[k] = (float)(iv * (1 + BOX_WIDEN));
 		q->o[k] = (float)o[k];
-		q->inv_near[k] = iv_near;
-		q->inv_far[k] = iv_far;
+	}
+}
+
+static inline void ray4_init(struct ray4 *q, const struct trace *r, vec3 center)
+{
+	struct ray_box b;
+	ray_box_init(&b, r, center);
+	q->tscale = b.tscale;
+	q->oct = b.oct;
+	for (uint32_t k = 0; k < 3; k++) {
+#if defined(__SSE2__)
+		q->o[k] = _mm_set1_ps(b.o[k]);
+		q->inv_near[k] = _mm_set1_ps(b.inv_near[k]);
+		q->inv_far[k] = _mm_set1_ps(b.inv_far[k]);
+#else
+		q->o[k] = b.o[k];
+		q->inv_near[k] = b.inv_near[k];
+		q->inv_far[k] = b.inv_far[k];
 #endif
 	}
 }
@@ -753,23 +774,31 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 	}
 }
 
+/* The unbounded references of g: the start of every closest-hit query.
+ * Same contract as ref_test. */
+static inline bool group_hit_unbounded(const struct accel *A, const struct group *g, struct trace *r,
+				       struct cand *best, bool brute)
+{
+	if (g->plane1) { /* unb_hit's plane test, the common case of one ground plane */
+		double t;
+		const struct geom_obj *go = g->plane1;
+		if (geom_plane_t(go->u.pl.pos, go->u.pl.n, r->o, r->d, &t) && t > r->tmin && t < r->tmax &&
+		    cand_better(best, g->unb[0], t)) {
+			cand_take(best, r, g->unb[0], t);
+			best->part = GEOM_PART_MAIN;
+			return true;
+		}
+		return false;
+	}
+	return g->n_unb ? unb_hit(A, g, r, best, brute) : false;
+}
+
 /* Closest hit in group g; fills *h (group space) only on success. */
 static bool group_hit(const struct accel *A, const struct group *g, struct trace *r, struct hit *h, bool brute)
 {
 	struct cand best;
 	cand_init(&best);
-	bool found = false;
-	if (g->plane1) { /* unb_hit's plane test, the common case of one ground plane */
-		double t;
-		const struct geom_obj *go = g->plane1;
-		if (geom_plane_t(go->u.pl.pos, go->u.pl.n, r->o, r->d, &t) && t > r->tmin && t < r->tmax) {
-			cand_take(&best, r, g->unb[0], t);
-			best.part = GEOM_PART_MAIN;
-			found = true;
-		}
-	} else if (g->n_unb) {
-		found = unb_hit(A, g, r, &best, brute);
-	}
+	bool found = group_hit_unbounded(A, g, r, &best, brute);
 	if (brute) {
 		found |= brute_hit(A, g, r, &best);
 	} else if (g->bvh.root_n) { /* the root is one leaf */
@@ -848,6 +877,173 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 	}
 }
 
+/* ---- packets of four rays ------------------------------------------------------------ */
+
+#if defined(__SSE2__)
+/*
+ * Four rays of one octant, one per SIMD lane (lane i: ray i), for the
+ * packet traversal: where bvh_hit tests one ray against a node's four
+ * children at once, bvh_hit4 tests each child against four rays at once.
+ * Neighbouring camera rays visit nearly the same nodes, so the packet
+ * shares the node loads, the ordering and the stack among them. The box
+ * arithmetic is bvh_hit's (the same constants, from ray_box_init), so a
+ * lane's box test passes exactly when bvh_hit's would with that ray's tmax.
+ */
+struct ray4x {
+	__m128 o[3], inv_near[3], inv_far[3];
+	double tscale[4];
+};
+
+/* The smallest of the four lanes. */
+static inline float lanes_min(__m128 v)
+{
+	v = _mm_min_ps(v, _mm_shuffle_ps(v, v, _MM_SHUFFLE(2, 3, 0, 1)));
+	v = _mm_min_ps(v, _mm_shuffle_ps(v, v, _MM_SHUFFLE(1, 0, 3, 2)));
+	return _mm_cvtss_f32(v);
+}
+
+/*
+ * The packet traversal of g's bounded references. A subtree is visited
+ * when any ray may hit it, nearest (smallest entry over the rays) first;
+ * each stack entry keeps every ray's entry distance (+inf for a ray that
+ * misses it), so a subtree is popped only for the rays still in front of
+ * their closest hit, and a leaf is tested only for those. Every ray thus
+ * tests every reference bvh_hit would let it test, perhaps more and in
+ * another order: CANONICAL TIES make its hit the same. found[i], best[i]
+ * and tr[i] are ray i's, as group_hit's.
+ */
+static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A, const struct group *g,
+							   struct trace tr[4], struct cand best[4], bool found[4],
+							   const struct ray4x *P, const uint32_t oct)
+{
+	const struct bvh4 *nodes = g->bvh.nodes;
+	const uint32_t near[3] = { 12 * (oct & 1), 4 + 12 * (oct >> 1 & 1), 8 + 12 * (oct >> 2 & 1) };
+	const uint32_t far[3] = { 12 * (~oct & 1), 4 + 12 * (~oct >> 1 & 1), 8 + 12 * (~oct >> 2 & 1) };
+	float tmn[4], tmx[4];
+	for (int i = 0; i < 4; i++) {
+		tmn[i] = box_tmin(tr[i].tmin * P->tscale[i]);
+		tmx[i] = box_tmax(tr[i].tmax * P->tscale[i]);
+	}
+	const __m128 tmin4 = _mm_loadu_ps(tmn), inf4 = _mm_set1_ps(INFINITY);
+	__m128 tmax4 = _mm_loadu_ps(tmx);
+	struct {
+		__m128 t; /* each ray's entry distance, +inf where it misses */
+		uint32_t idx, n;
+	} stack[3 * BVH_MAX_DEPTH + 4];
+	int sp = 0;
+	uint32_t idx = 0, n = 0;
+	__m128 tcur = tmin4; /* the entry distances of the subtree at hand */
+	for (;;) {
+		if (n) {
+			/* the rays still in front of their closest hit */
+			unsigned lanes = (unsigned)_mm_movemask_ps(_mm_cmple_ps(tcur, tmax4));
+			while (lanes) {
+				int i = __builtin_ctz(lanes);
+				lanes &= lanes - 1;
+				for (uint32_t k = 0; k < n; k++)
+					found[i] |= ref_test(A, g, group_ref(g, idx + k), &tr[i], &best[i], false);
+				tmx[i] = box_tmax(tr[i].tmax * P->tscale[i]);
+			}
+			tmax4 = _mm_loadu_ps(tmx);
+		} else {
+			const struct bvh4 *nd = &nodes[idx];
+			const float *b = (const float *)(const void *)nd; /* rows as in node4_hit */
+			__m128 e[4];
+			float key[4];
+			int m = 0;
+			for (int c = 0; c < 4; c++) {
+				__m128 t0 = tmin4, t1 = tmax4;
+				for (int k = 0; k < 3; k++) {
+					__m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[near[k] + (uint32_t)c]), P->o[k]),
+							       P->inv_near[k]);
+					__m128 tf = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[far[k] + (uint32_t)c]), P->o[k]),
+							       P->inv_far[k]);
+					t0 = _mm_max_ps(t0, tn);
+					t1 = _mm_min_ps(t1, tf);
+				}
+				__m128 hit = _mm_cmple_ps(t0, t1);
+				e[c] = _mm_or_ps(_mm_and_ps(hit, t0), _mm_andnot_ps(hit, inf4));
+				m |= (_mm_movemask_ps(hit) != 0) << c;
+				key[c] = lanes_min(e[c]);
+			}
+			if (m) { /* nearest first; the others pushed farthest first */
+				int cs[4], k = 0;
+				for (int c = 0; c < 4; c++) {
+					if (!(m >> c & 1))
+						continue;
+					int j = k++;
+					for (; j > 0 && key[cs[j - 1]] > key[c]; j--)
+						cs[j] = cs[j - 1];
+					cs[j] = c;
+				}
+				for (int j = k - 1; j >= 1; j--) {
+					stack[sp].idx = nd->idx[cs[j]];
+					stack[sp].n = nd->n[cs[j]];
+					stack[sp++].t = e[cs[j]];
+				}
+				idx = nd->idx[cs[0]];
+				n = nd->n[cs[0]];
+				tcur = e[cs[0]];
+				continue;
+			}
+		}
+		/* pop the next subtree still in front of some ray's closest hit */
+		for (;;) {
+			if (sp == 0)
+				return;
+			sp--;
+			if (_mm_movemask_ps(_mm_cmple_ps(stack[sp].t, tmax4)))
+				break;
+		}
+		idx = stack[sp].idx;
+		n = stack[sp].n;
+		tcur = stack[sp].t;
+	}
+}
+
+/* group_hit for four rays of one octant through g's tree (g->bvh.n_nodes4). */
+static void group_hit4(const struct accel *A, const struct group *g, struct trace tr[4], uint32_t oct,
+		       struct hit h[4], bool hit[4])
+{
+	struct cand best[4];
+	bool found[4];
+	struct ray4x P;
+	float o[3][4], inv_near[3][4], inv_far[3][4];
+	for (int i = 0; i < 4; i++) {
+		cand_init(&best[i]);
+		found[i] = group_hit_unbounded(A, g, &tr[i], &best[i], false);
+		struct ray_box q;
+		ray_box_init(&q, &tr[i], g->center);
+		for (int k = 0; k < 3; k++) {
+			o[k][i] = q.o[k];
+			inv_near[k][i] = q.inv_near[k];
+			inv_far[k][i] = q.inv_far[k];
+		}
+		P.tscale[i] = q.tscale;
+	}
+	for (int k = 0; k < 3; k++) {
+		P.o[k] = _mm_loadu_ps(o[k]);
+		P.inv_near[k] = _mm_loadu_ps(inv_near[k]);
+		P.inv_far[k] = _mm_loadu_ps(inv_far[k]);
+	}
+	switch (oct) { /* one copy of the loop per octant, as group_hit */
+	case 0: bvh_hit4(A, g, tr, best, found, &P, 0); break;
+	case 1: bvh_hit4(A, g, tr, best, found, &P, 1); break;
+	case 2: bvh_hit4(A, g, tr, best, found, &P, 2); break;
+	case 3: bvh_hit4(A, g, tr, best, found, &P, 3); break;
+	case 4: bvh_hit4(A, g, tr, best, found, &P, 4); break;
+	case 5: bvh_hit4(A, g, tr, best, found, &P, 5); break;
+	case 6: bvh_hit4(A, g, tr, best, found, &P, 6); break;
+	default: bvh_hit4(A, g, tr, best, found, &P, 7); break;
+	}
+	for (int i = 0; i < 4; i++) {
+		hit[i] = found[i];
+		if (found[i])
+			finish(A, g, &tr[i], &best[i], &h[i]);
+	}
+}
+#endif
+
 /* ---- public queries ----------------------------------------------------------------- */
 
 /* Finite origin and direction, non-zero direction, tmin < tmax (false when
@@ -871,6 +1067,26 @@ bool accel_intersect(const struct accel *a, const struct ray *r, struct hit *h)
 	struct trace t;
 	trace_init(&t, r->o, r->d, ray_tmin(r), r->tmax);
 	return group_hit(a, a->root, &t, h, false);
+}
+
+void accel_intersect4(const struct accel *a, const struct ray r[4], struct hit h[4], bool hit[4])
+{
+#if defined(__SSE2__)
+	const struct group *g = a->root;
+	bool packet = g && !g->bvh.root_n && g->bvh.n_nodes4;
+	uint32_t oct = ray_octant(r[0].d);
+	for (int i = 0; i < 4 && packet; i++)
+		packet = ray_ok(&r[i]) && ray_octant(r[i].d) == oct;
+	if (packet) {
+		struct trace tr[4];
+		for (int i = 0; i < 4; i++)
+			trace_init(&tr[i], r[i].o, r[i].d, ray_tmin(&r[i]), r[i].tmax);
+		group_hit4(a, g, tr, oct, h, hit);
+		return;
+	}
+#endif
+	for (int i = 0; i < 4; i++) /* rays of different octants, a root without a tree */
+		hit[i] = accel_intersect(a, &r[i], &h[i]);
 }
 
 bool accel_intersect_brute(const struct accel *a, const struct ray *r, struct hit *h)

@@ -74,6 +74,11 @@ bool accel_bounds(const struct accel *a, vec3 *lo, vec3 *hi);
  * shaders read them, and the sphere mapping (atan2, asin) costs as much as
  * the rest of a primary ray. */
 bool accel_intersect(const struct accel *a, const struct ray *r, struct hit *h);
+/* The closest hits of four rays at once: hit[i] and h[i] are exactly what
+ * accel_intersect(a, &r[i], &h[i]) gives, bit for bit (ties are canonical,
+ * see accel.c). Faster when the rays are neighbours that visit the same
+ * nodes, as the eye rays of a 2x2 block of pixels do. Thread-safe. */
+void accel_intersect4(const struct accel *a, const struct ray r[4], struct hit h[4], bool hit[4]);
 /* Completes h->u, h->v and h->mp of a hit that accel_intersect or
  * accel_intersect_brute returned with the same accel (the values are those
  * an eager computation gives, bit for bit); does nothing when they are

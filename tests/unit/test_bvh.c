@@ -7,6 +7,9 @@
  * builder alone: every item lands in exactly one leaf, leaves cover their
  * items' boxes, and degenerate inputs (equal centroids) build; packed
  * leaves; a group of many instances (packed, without a reference array).
+ * Packets: accel_intersect4 gives every ray exactly accel_intersect's hit,
+ * for four unrelated rays (mostly of different octants) and for four
+ * neighbouring rays from one origin (the packet traversal).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -35,17 +38,55 @@ struct job {
 	uint64_t seed;
 	int from, to;
 	int mismatch, ties, hits;
+	int packets, packet_mismatch;
 };
+
+/* The same hit, bit for bit (what accel_intersect4 promises). */
+static bool same_hit(bool b1, const struct hit *h1, bool b2, const struct hit *h2)
+{
+	if (b1 != b2)
+		return false;
+	return !b1 || (memcmp(&h1->t, &h2->t, sizeof h1->t) == 0 && memcmp(&h1->p, &h2->p, sizeof h1->p) == 0 &&
+		       memcmp(&h1->n, &h2->n, sizeof h1->n) == 0 && memcmp(&h1->ng, &h2->ng, sizeof h1->ng) == 0 &&
+		       h1->object == h2->object && h1->material == h2->material);
+}
+
+/* accel_intersect4 over r[0..4) against accel_intersect, ray by ray. */
+static void packet_check(struct job *j, const struct ray r[4])
+{
+	struct hit h[4], h1;
+	bool hit[4];
+	accel_intersect4(j->a, r, h, hit);
+	j->packets++;
+	for (int i = 0; i < 4; i++) {
+		bool b1 = accel_intersect(j->a, &r[i], &h1);
+		if (!same_hit(b1, &h1, hit[i], &h[i])) {
+			j->packet_mismatch++;
+			return;
+		}
+	}
+}
 
 /* Rays [from, to): BVH, brute force and occlusion compared. */
 static void *run_rays(void *arg)
 {
 	struct job *j = arg;
+	struct ray last[4];
 	for (int k = j->from; k < j->to; k++) {
 		vec3 o = v3(j->lo.x + (j->hi.x - j->lo.x) * rng_uniform(j->seed, 3ull * k + 1000000),
 			    j->lo.y + (j->hi.y - j->lo.y) * rng_uniform(j->seed, 3ull * k + 1000001),
 			    j->lo.z + (j->hi.z - j->lo.z) * rng_uniform(j->seed, 3ull * k + 1000002));
 		struct ray r = { o, unit_dir(j->seed, (uint64_t)k), 0, INFINITY };
+		last[(k - j->from) % 4] = r;
+		if ((k - j->from) % 4 == 3) {
+			packet_check(j, last); /* four unrelated rays */
+			struct ray fan[4]; /* four neighbours from one origin, as a 2x2 block of pixels */
+			for (int i = 0; i < 4; i++) {
+				vec3 d = v3_add(r.d, v3(2e-3 * (i & 1), 2e-3 * (i >> 1), 0));
+				fan[i] = (struct ray){ o, v3_norm(d), 0, INFINITY };
+			}
+			packet_check(j, fan);
+		}
 		struct hit h1, h2;
 		bool b1 = accel_intersect(j->a, &r, &h1), b2 = accel_intersect_brute(j->a, &r, &h2);
 		bool occ = accel_occluded(j->a, &r);
@@ -99,9 +140,12 @@ static void agree(const char *path)
 		run_rays(&jobs[1]);
 	int mismatch = jobs[0].mismatch + jobs[1].mismatch, ties = jobs[0].ties + jobs[1].ties;
 	int hits = jobs[0].hits + jobs[1].hits;
-	printf("%s: %d rays, %d hits, %d mismatches, %d exact ties between objects\n", path, N_RAYS, hits,
-	       mismatch, ties);
+	int packets = jobs[0].packets + jobs[1].packets, pmis = jobs[0].packet_mismatch + jobs[1].packet_mismatch;
+	printf("%s: %d rays, %d hits, %d mismatches, %d exact ties between objects; %d packets, %d unlike single rays\n",
+	       path, N_RAYS, hits, mismatch, ties, packets, pmis);
 	CHECK(mismatch == 0);
+	CHECK(pmis == 0);
+	CHECK(packets >= N_RAYS / 2);
 	CHECK(hits > N_RAYS / 10);
 	CHECK(ties < N_RAYS / 1000);
 	accel_free(a);
@@ -123,8 +167,11 @@ static void agree_accel(const char *label, const struct accel *a)
 	run_rays(&jobs[0]);
 	run_rays(&jobs[1]);
 	int mismatch = jobs[0].mismatch + jobs[1].mismatch, hits = jobs[0].hits + jobs[1].hits;
-	printf("%s: %d rays, %d hits, %d mismatches\n", label, 2 * N_RAYS / 10, hits, mismatch);
+	int pmis = jobs[0].packet_mismatch + jobs[1].packet_mismatch;
+	printf("%s: %d rays, %d hits, %d mismatches, %d packets unlike single rays\n", label, 2 * N_RAYS / 10, hits,
+	       mismatch, pmis);
 	CHECK(mismatch == 0);
+	CHECK(pmis == 0);
 	CHECK(hits > N_RAYS / 100);
 }
 
