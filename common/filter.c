@@ -324,6 +324,19 @@ static vec3 adapt_square(struct adapt *a, uint32_t x, uint32_t y, uint32_t size,
 	return v3_scale(v3_add(v3_add(tl, tr), v3_add(bl, br)), 0.25);
 }
 
+bool filter_single_ray(const struct filter_chain *fc)
+{
+	return fc->base.kind == FILTER_STANDARD && fc->n_layers == 0;
+}
+
+/* expand()'s last layer for the sample of a standard pixel: position (x +
+ * 0.5, y + 0.5), sample index 0, no lens. */
+void filter_eye_ray(const struct filter_chain *fc, uint32_t x, uint32_t y, struct ray *r, uint64_t *seed)
+{
+	*r = cam_ray(&fc->cam, x + 0.5, y + 0.5);
+	*seed = seed_of(x, y, 0);
+}
+
 vec3 filter_pixel(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x,
 		  uint32_t y, filter_trace_fn fn, void *arg, uint64_t *rays)
 {

@@ -21,6 +21,7 @@
 #ifndef PORTRAY_FILTER_H
 #define PORTRAY_FILTER_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -69,6 +70,18 @@ void filter_scratch_free(struct filter_scratch *sc);
  */
 vec3 filter_pixel(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x,
 		  uint32_t y, filter_trace_fn fn, void *arg, uint64_t *rays);
+
+/*
+ * True when the chain traces one pinhole eye ray per pixel, through its
+ * centre (filter standard with nothing layered on it). filter_pixel's
+ * colour is then fn(arg, &r, seed) of the ray and seed filter_eye_ray
+ * gives, so a caller may trace the eye rays of neighbouring pixels together
+ * (accel_intersect4) and shade each one as filter_pixel would.
+ */
+bool filter_single_ray(const struct filter_chain *fc);
+/* The eye ray through pixel (x, y)'s centre and its sample seed, as
+ * filter_pixel traces them for a filter_single_ray chain. */
+void filter_eye_ray(const struct filter_chain *fc, uint32_t x, uint32_t y, struct ray *r, uint64_t *seed);
 
 /*
  * Colour at a continuous pixel position (px, py) with every layered filter

@@ -3,7 +3,10 @@
  *
  * The same code runs in the master (locally) and in every worker: a tile is
  * a rectangle of pixels, each pixel's colour comes from filter_pixel over
- * shade_trace, so it depends on the scene and the pixel alone.
+ * shade_trace, so it depends on the scene and the pixel alone. With one eye
+ * ray per pixel (filter standard), the tile goes in 2x2 blocks whose eye
+ * rays find their closest hits together (accel_intersect4: the same hits,
+ * faster); each pixel is then shaded alone, exactly as filter_pixel would.
  */
 #include "common/render.h"
 
@@ -95,11 +98,79 @@ static vec3 trace_shade(void *arg, const struct ray *ray, uint64_t seed)
 	return shade_trace(r->shade, ray, seed);
 }
 
+/*
+ * Colours of n <= 4 pixels (px[k], py[k]) of a filter_single_ray chain:
+ * their eye rays' closest hits from one accel_intersect4, each shaded as
+ * filter_pixel over shade_trace would (the same colour, bit for bit). A
+ * block of fewer than four pixels repeats its last ray.
+ */
+static void eye_block(const struct renderer *r, const uint32_t px[4], const uint32_t py[4], int n, vec3 out[4])
+{
+	struct ray u[4];
+	uint64_t seed[4];
+	bool ok[4];
+	for (int k = 0; k < 4; k++) {
+		int q = k < n ? k : n - 1;
+		struct ray e;
+		filter_eye_ray(&r->fc, px[q], py[q], &e, &seed[k]);
+		ok[k] = shade_eye_ray(&e, &u[k]);
+		if (!ok[k])
+			u[k] = e; /* traced (accel_intersect refuses it), never shaded */
+	}
+	struct hit h[4];
+	bool hit[4];
+	accel_intersect4(r->accel, u, h, hit);
+	for (int k = 0; k < n; k++)
+		out[k] = ok[k] ? shade_eye_hit(r->shade, &u[k], hit[k] ? &h[k] : NULL, seed[k]) : v3(0, 0, 0);
+}
+
+/* renderer_tile_cancellable for a filter_single_ray chain, in 2x2 blocks. */
+static int tile_blocks(const struct renderer *r, struct tile_rect t, uint8_t *rgb, atomic_int *cancel,
+		       uint64_t *rays)
+{
+	for (uint32_t j = 0; j < t.h; j += 2) {
+		for (uint32_t i = 0; i < t.w; i += 2) {
+			uint32_t px[4], py[4];
+			uint8_t *dst[4];
+			int n = 0;
+			for (uint32_t k = 0; k < 4; k++) {
+				uint32_t ii = i + (k & 1), jj = j + (k >> 1);
+				if (ii >= t.w || jj >= t.h)
+					continue;
+				uint64_t x = (uint64_t)t.x + ii, y = (uint64_t)t.y + jj;
+				uint8_t *p = rgb + ((size_t)jj * t.w + ii) * 3;
+				if (x >= r->w || y >= r->h) {
+					memset(p, 0, 3);
+					continue;
+				}
+				px[n] = (uint32_t)x;
+				py[n] = (uint32_t)y;
+				dst[n++] = p;
+			}
+			if (n == 0)
+				continue;
+			vec3 c[4];
+			eye_block(r, px, py, n, c);
+			for (int k = 0; k < n; k++)
+				filter_quantise(c[k], dst[k]);
+			*rays += (uint64_t)n;
+		}
+		if (cancel && atomic_load_explicit(cancel, memory_order_relaxed))
+			return 0;
+	}
+	return 1;
+}
+
 int renderer_tile_cancellable(const struct renderer *r, struct tile_rect t, uint8_t *rgb,
 			      atomic_int *cancel)
 {
-	struct filter_scratch *scratch = filter_scratch_new(&r->fc); /* NULL: no cache, same colours */
 	uint64_t rays = 0;
+	if (filter_single_ray(&r->fc)) {
+		int complete = tile_blocks(r, t, rgb, cancel, &rays);
+		atomic_fetch_add_explicit(&((struct renderer *)r)->rays, rays, memory_order_relaxed);
+		return complete;
+	}
+	struct filter_scratch *scratch = filter_scratch_new(&r->fc); /* NULL: no cache, same colours */
 	int complete = 1;
 	for (uint32_t j = 0; j < t.h && complete; j++) {
 		uint8_t *row = rgb + (size_t)j * t.w * 3;

@@ -280,6 +280,8 @@ static vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, c
 static vec3 reflect(vec3 d, vec3 n) { return v3_sub(d, v3_scale(n, 2 * v3_dot(d, n))); }
 
 static vec3 trace(const struct shade_ctx *c, const struct ray *r, int depth, double weight, uint64_t seed);
+static vec3 trace_hit(const struct shade_ctx *c, const struct ray *r, const struct hit *hp, int depth,
+		      double weight, uint64_t seed);
 
 /* trace() of a secondary ray from o along unit d. */
 static vec3 trace_from(const struct shade_ctx *c, vec3 o, vec3 d, int depth, double weight, uint64_t seed)
@@ -295,7 +297,17 @@ static vec3 trace_from(const struct shade_ctx *c, vec3 o, vec3 d, int depth, dou
 static vec3 trace(const struct shade_ctx *c, const struct ray *r, int depth, double weight, uint64_t seed)
 {
 	struct hit h;
-	if (!accel_intersect(c->a, r, &h) || !v3_finite(h.p))
+	if (!accel_intersect(c->a, r, &h))
+		return v3(0, 0, 0);
+	return trace_hit(c, r, &h, depth, weight, seed);
+}
+
+/* trace() given the ray's closest hit *hp. */
+static vec3 trace_hit(const struct shade_ctx *c, const struct ray *r, const struct hit *hp, int depth,
+		      double weight, uint64_t seed)
+{
+	struct hit h = *hp;
+	if (!v3_finite(h.p))
 		return v3(0, 0, 0);
 	vec3 d = r->d;
 
@@ -356,11 +368,24 @@ static vec3 trace(const struct shade_ctx *c, const struct ray *r, int depth, dou
 	return col;
 }
 
-vec3 shade_trace(const struct shade_ctx *c, const struct ray *r, uint64_t seed)
+bool shade_eye_ray(const struct ray *r, struct ray *u)
 {
 	double len = v3_len(r->d);
 	if (!(len > 0) || !isfinite(len) || !v3_finite(r->o))
+		return false;
+	*u = (struct ray){ r->o, v3_scale(r->d, 1 / len), r->tmin * len, r->tmax * len };
+	return true;
+}
+
+vec3 shade_eye_hit(const struct shade_ctx *c, const struct ray *u, const struct hit *h, uint64_t seed)
+{
+	return h ? trace_hit(c, u, h, 0, 1.0, seed) : v3(0, 0, 0);
+}
+
+vec3 shade_trace(const struct shade_ctx *c, const struct ray *r, uint64_t seed)
+{
+	struct ray u;
+	if (!shade_eye_ray(r, &u))
 		return v3(0, 0, 0);
-	struct ray u = { r->o, v3_scale(r->d, 1 / len), r->tmin * len, r->tmax * len };
 	return trace(c, &u, 0, 1.0, seed);
 }

@@ -5,6 +5,7 @@
 #ifndef PORTRAY_SHADE_H
 #define PORTRAY_SHADE_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "common/accel.h"
@@ -23,5 +24,17 @@ void shade_ctx_free(struct shade_ctx *c);
  * (scene, ray, seed). Thread-safe.
  */
 vec3 shade_trace(const struct shade_ctx *c, const struct ray *r, uint64_t seed);
+
+/*
+ * shade_trace in two halves, for callers that find the closest hits of
+ * several eye rays at once (accel_intersect4): shade_eye_ray makes the ray
+ * shade_trace traces for r (unit direction, tmin and tmax scaled to match),
+ * false when r cannot be traced (shade_trace's colour is then black);
+ * shade_eye_hit is the colour given that ray's closest hit, h (NULL for a
+ * miss) from accel_intersect or accel_intersect4 with the context's accel.
+ * Together they give shade_trace's colour, bit for bit.
+ */
+bool shade_eye_ray(const struct ray *r, struct ray *u);
+vec3 shade_eye_hit(const struct shade_ctx *c, const struct ray *u, const struct hit *h, uint64_t seed);
 
 #endif
