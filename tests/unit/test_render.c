@@ -183,13 +183,28 @@ int main(void)
 	free(d);
 	free(e);
 
-	/* standard: exactly one eye ray per pixel; super-sample 1x1 is the same image */
+	/* standard: exactly one eye ray per pixel; super-sample 1x1 (traced pixel
+	 * by pixel through filter_pixel) is the same image as standard's 2x2
+	 * blocks through accel_intersect4 */
 	c = base_camera();
 	add_filter(&c, FILTER_STANDARD);
 	s = make_scene(&c, 1);
 	CHECK(renderer_new(s, &r, &err) == 0);
 	a = render(r, 2, 16);
 	CHECK(renderer_rays(r) == W * H);
+	/* 2x2 blocks (render.c): odd tiles and -j give the same image; a tile
+	 * over the image's corner has its outside pixels black */
+	uint8_t *o = render(r, 1, 3), *o2 = render(r, 3, 5);
+	CHECK(memcmp(a, o, W * H * 3) == 0 && memcmp(a, o2, W * H * 3) == 0);
+	free(o);
+	free(o2);
+	struct tile_rect corner = { W - 3, H - 1, 5, 3 };
+	uint8_t cb[5 * 3 * 3];
+	memset(cb, 0x55, sizeof cb);
+	renderer_tile(r, corner, cb);
+	CHECK(memcmp(cb, a + ((H - 1) * W + W - 3) * 3, 9) == 0);
+	for (int i = 9; i < (int)sizeof cb; i++)
+		CHECK(cb[i] == 0);
 	renderer_free(r);
 	scene_free(s);
 	add_filter(&c, FILTER_SUPERSAMPLE);
