@@ -30,12 +30,21 @@ void renderer_size(const struct renderer *r, uint32_t *w, uint32_t *h);
 int renderer_set_size(struct renderer *r, uint32_t w, uint32_t h);
 
 /*
+ * The pixels' revision: raised by every change that makes some scene's
+ * pixels differ, so that the farm's build check (proto_build_id) keeps
+ * builds that draw different pixels apart even at one version number.
+ * 2: canonical ties between coincident surfaces (docs/language.md).
+ */
+#define RENDER_PIXEL_REV 2
+
+/*
  * Renders one tile into rgb (t.w*t.h*3 bytes, rows top to bottom). Pixels of
  * the rectangle outside the image are written black. Thread-safe.
  */
 void renderer_tile(const struct renderer *r, struct tile_rect t, uint8_t *rgb);
 /*
- * As renderer_tile, but gives up between pixel rows when cancel (may be NULL)
+ * As renderer_tile, but gives up between rows of pixels (pairs of rows for
+ * filter standard's 2x2 blocks) when cancel (may be NULL)
  * becomes non-zero. Returns 1 when the whole tile is in rgb, 0 when it gave up
  * (rgb then holds a partial tile: do not use it).
  */

@@ -15,6 +15,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "common/render.h"
 #include "proto/serial.h"
 
 /* ---- small pure helpers ---- */
@@ -53,6 +54,9 @@ uint32_t proto_crc32(uint32_t crc, const uint8_t *p, size_t n)
 _Static_assert(PROTO_BUILD_PROTO == PROTO_VERSION && PROTO_BUILD_SCENE == PROTO_SCENE_VERSION, "build id numbers");
 #define STR2(x) #x
 #define STR(x) STR2(x)
+/* the pixels' revision as a plain number (common/render.h) */
+#define PROTO_BUILD_PIXELS 2
+_Static_assert(PROTO_BUILD_PIXELS == RENDER_PIXEL_REV, "build id numbers");
 
 /* The compiler and the architecture: floating-point code generation differs
  * between them, and the promise is byte-identical pixels. */
@@ -76,9 +80,11 @@ _Static_assert(PROTO_BUILD_PROTO == PROTO_VERSION && PROTO_BUILD_SCENE == PROTO_
 const char *proto_build_id(void)
 {
 	/* Two builds that agree on all of these trace the same pixels: the same
-	 * sources (version), encodings, compiler and architecture. */
-	return "portray-" PORTRAY_VERSION "/proto-" STR(PROTO_BUILD_PROTO) "/scene-" STR(PROTO_BUILD_SCENE) "/" BUILD_CC
-	       "/" BUILD_ARCH;
+	 * sources (version, pixel revision), encodings, compiler and architecture. */
+	static const char id[] = "portray-" PORTRAY_VERSION "/proto-" STR(PROTO_BUILD_PROTO) "/scene-" STR(
+		PROTO_BUILD_SCENE) "/pixels-" STR(PROTO_BUILD_PIXELS) "/" BUILD_CC "/" BUILD_ARCH;
+	_Static_assert(sizeof id - 1 <= LIM_BUILD_ID, "the build id fits HELLO");
+	return id;
 }
 
 const char *proto_type_name(int type)
