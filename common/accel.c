@@ -265,14 +265,18 @@ static bool box_hit(const float b[6], vec3 center, const struct trace *r)
 
 struct cand {
 	uint32_t ref;
+	uint32_t key; /* rank among hits at equal t (CANONICAL TIES) */
 	double t, b1, b2;
 	int part;
 	struct hit sub; /* instances and CSG: the finished hit in the group's space */
 };
 
 /*
- * CANONICAL TIES. The closest hit is the least (t, reference) pair: at equal
- * t the lower reference wins. So the hit never depends on the order in which
+ * CANONICAL TIES. The closest hit is the least (t, key) pair: at equal t the
+ * lower key wins. A reference's key is the reference itself (kind, then
+ * index: the order written), except an instance's, which is made of its
+ * instance object's index, since a packed group numbers its instances in
+ * leaf order. So the hit never depends on the order in which
  * references are tested, and a traversal may visit the tree in any order
  * (packets, accel_intersect4) and still give every ray the same hit bit for
  * bit. Primitive tests accept t < r->tmax and report a primitive's first
@@ -282,7 +286,7 @@ struct cand {
  */
 static inline void cand_init(struct cand *c)
 {
-	c->ref = UINT32_MAX;
+	c->ref = c->key = UINT32_MAX;
 	c->t = INFINITY;
 }
 
@@ -296,18 +300,26 @@ static inline double next_up(double t)
 	return t;
 }
 
-/* Whether a hit of ref at t beats *c (canonical ties). */
-static inline bool cand_better(const struct cand *c, uint32_t ref, double t)
+/* Whether a hit of key at t beats *c (canonical ties). */
+static inline bool cand_better(const struct cand *c, uint32_t key, double t)
 {
-	return t < c->t || (t == c->t && ref < c->ref);
+	return t < c->t || (t == c->t && key < c->key);
 }
 
-/* Records a hit of ref at t that beats *c and narrows r to admit its ties. */
-static inline void cand_take(struct cand *c, struct trace *r, uint32_t ref, double t)
+/* Records a hit of ref (of key) at t that beats *c and narrows r to admit
+ * its ties. */
+static inline void cand_take_key(struct cand *c, struct trace *r, uint32_t ref, uint32_t key, double t)
 {
 	c->ref = ref;
+	c->key = key;
 	c->t = t;
 	r->tmax = next_up(t);
+}
+
+/* The same for a reference whose key is itself (all but instances). */
+static inline void cand_take(struct cand *c, struct trace *r, uint32_t ref, double t)
+{
+	cand_take_key(c, r, ref, ref, t);
 }
 
 static bool group_hit(const struct accel *A, const struct group *g, struct trace *r, struct hit *h, bool brute);
@@ -419,28 +431,26 @@ static __attribute__((noinline)) bool ref_test_slow(const struct accel *A, const
 						     struct trace *r, struct cand *c, bool brute)
 {
 	uint32_t i = REF_IDX(ref);
-	double t;
 	if (REF_KIND(ref) == REF_XPRIM) {
 		const struct xprim *x = &g->xp[i];
 		if (x->g->kind != PRIM_CSG)
 			return xprim_test(x->g, ref, r, c);
 		struct hit hh;
-		if (!csg_hit(A->s, (struct geom_obj *const *)A->gobj, x->obj, r->o, r->d, r->tmin, r->tmax, &hh))
-			return false;
-		t = hh.t;
-		if (!cand_better(c, ref, t))
+		if (!csg_hit(A->s, (struct geom_obj *const *)A->gobj, x->obj, r->o, r->d, r->tmin, r->tmax, &hh) ||
+		    !cand_better(c, ref, hh.t))
 			return false;
 		c->sub = hh;
-	} else {
-		struct hit hh;
-		if (!inst_hit(A, &g->inst[i], r, &hh, brute))
-			return false;
-		t = hh.t;
-		if (!cand_better(c, ref, t))
-			return false;
-		c->sub = hh;
+		cand_take(c, r, ref, hh.t);
+		return true;
 	}
-	cand_take(c, r, ref, t);
+	struct hit hh;
+	if (!inst_hit(A, &g->inst[i], r, &hh, brute))
+		return false;
+	uint32_t key = REF_MAKE(REF_INST, g->inst[i].obj);
+	if (!cand_better(c, key, hh.t))
+		return false;
+	c->sub = hh;
+	cand_take_key(c, r, ref, key, hh.t);
 	return true;
 }
 
@@ -894,6 +904,15 @@ struct ray4x {
 	double tscale[4];
 };
 
+/* The lanes (bit i: ray i) whose entry distance t into a subtree is finite
+ * (the ray meets its box: a miss is +inf) and not behind the ray's closest
+ * hit so far. The first test matters while a ray has no hit: its tmax is
+ * +inf too. */
+static inline unsigned lanes_in_front(__m128 t, __m128 tmax4, __m128 inf4)
+{
+	return (unsigned)_mm_movemask_ps(_mm_and_ps(_mm_cmplt_ps(t, inf4), _mm_cmple_ps(t, tmax4)));
+}
+
 /* The smallest of the four lanes. */
 static inline float lanes_min(__m128 v)
 {
@@ -906,8 +925,8 @@ static inline float lanes_min(__m128 v)
  * The packet traversal of g's bounded references. A subtree is visited
  * when any ray may hit it, nearest (smallest entry over the rays) first;
  * each stack entry keeps every ray's entry distance (+inf for a ray that
- * misses it), so a subtree is popped only for the rays still in front of
- * their closest hit, and a leaf is tested only for those. Every ray thus
+ * misses it), so a subtree is popped only for the rays that meet it and are
+ * still in front of their closest hit, and a leaf is tested only for those. Every ray thus
  * tests every reference bvh_hit would let it test, perhaps more and in
  * another order: CANONICAL TIES make its hit the same. found[i], best[i]
  * and tr[i] are ray i's, as group_hit's.
@@ -935,8 +954,8 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 	__m128 tcur = tmin4; /* the entry distances of the subtree at hand */
 	for (;;) {
 		if (n) {
-			/* the rays still in front of their closest hit */
-			unsigned lanes = (unsigned)_mm_movemask_ps(_mm_cmple_ps(tcur, tmax4));
+			/* the rays that meet the leaf, in front of their closest hit */
+			unsigned lanes = lanes_in_front(tcur, tmax4, inf4);
 			while (lanes) {
 				int i = __builtin_ctz(lanes);
 				lanes &= lanes - 1;
@@ -992,7 +1011,7 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 			if (sp == 0)
 				return;
 			sp--;
-			if (_mm_movemask_ps(_mm_cmple_ps(stack[sp].t, tmax4)))
+			if (lanes_in_front(stack[sp].t, tmax4, inf4))
 				break;
 		}
 		idx = stack[sp].idx;

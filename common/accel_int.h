@@ -17,6 +17,8 @@ enum { REF_SPHERE = 0, REF_TRI = 1, REF_XPRIM = 2, REF_INST = 3 };
 #define REF_IDX(r) ((r) & 0x3fffffffu)
 /* references per group: 30 bits of index */
 #define ACCEL_MAX_REFS (1u << 30)
+/* an instance's tie key is REF_MAKE(REF_INST, its object index) (accel.c) */
+_Static_assert(LIM_OBJECTS <= ACCEL_MAX_REFS, "object indices fit a reference's index bits");
 /* primitives per BVH leaf */
 #define ACCEL_MAX_LEAF 4
 /* instances per leaf in a group of at least ACCEL_PACK_MIN instances and

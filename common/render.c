@@ -115,7 +115,7 @@ static void eye_block(const struct renderer *r, const uint32_t px[4], const uint
 		filter_eye_ray(&r->fc, px[q], py[q], &e, &seed[k]);
 		ok[k] = shade_eye_ray(&e, &u[k]);
 		if (!ok[k])
-			u[k] = e; /* traced (accel_intersect refuses it), never shaded */
+			u[k] = e; /* traced for nothing, never shaded */
 	}
 	struct hit h[4];
 	bool hit[4];
