@@ -30,11 +30,11 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "common/crc32.h"
 #include "common/limits.h"
 
 /* ---- tables ---------------------------------------------------------------- */
 
-static uint32_t crc_table[256];
 static uint8_t len_code[259];   /* match length 3..258 -> code index 0..28 */
 static uint8_t dist_code[512];  /* see img_dist_code */
 static pthread_once_t tables_once = PTHREAD_ONCE_INIT;
@@ -54,12 +54,6 @@ static const uint8_t cl_order[19] = { 16, 17, 18, 0, 8, 7, 9, 6, 10, 5, 11, 4, 1
 
 static void tables_init(void)
 {
-	for (uint32_t n = 0; n < 256; n++) {
-		uint32_t c = n;
-		for (int k = 0; k < 8; k++)
-			c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-		crc_table[n] = c;
-	}
 	for (int code = 0; code < 29; code++) {
 		int top = code == 28 ? 258 : len_base[code] + (1 << len_extra[code]) - 1;
 		if (code == 27)
@@ -82,20 +76,6 @@ static void tables_init(void)
 static inline int img_dist_code(unsigned d)
 {
 	return d <= 256 ? dist_code[d - 1] : dist_code[256 + ((d - 1) >> 7)];
-}
-
-/*
- * CRC-32 as in PNG and zlib (reflected polynomial 0xEDB88320). Start with
- * crc = 0; feeding a message in pieces chains: crc32(crc32(0, a), b) is the
- * CRC of a followed by b. "123456789" gives 0xCBF43926.
- */
-uint32_t img_crc32(uint32_t crc, const uint8_t *p, size_t n)
-{
-	pthread_once(&tables_once, tables_init);
-	crc = ~crc;
-	for (size_t i = 0; i < n; i++)
-		crc = crc_table[(crc ^ p[i]) & 0xff] ^ (crc >> 8);
-	return ~crc;
 }
 
 /* Adler-32 (RFC 1950). Start with adler = 1; chains like img_crc32. */
@@ -663,8 +643,8 @@ static void png_chunk(struct obuf *o, const char *type, const uint8_t *data, siz
 	ob_bytes(o, type, 4);
 	if (n)
 		ob_bytes(o, data, n);
-	uint32_t crc = img_crc32(0, (const uint8_t *)type, 4);
-	ob_be32(o, img_crc32(crc, data, n));
+	uint32_t crc = crc32_update(0, (const uint8_t *)type, 4);
+	ob_be32(o, crc32_update(crc, data, n));
 }
 
 static int img_size_ok(uint32_t w, uint32_t h)

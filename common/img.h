@@ -18,7 +18,6 @@ int img_png_encode(const uint8_t *rgb, uint32_t w, uint32_t h, uint8_t **out, si
 int img_write(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h);
 
 /* CRC-32 (PNG/zlib polynomial) and Adler-32, exported for tests. */
-uint32_t img_crc32(uint32_t crc, const uint8_t *p, size_t n);
 uint32_t img_adler32(uint32_t adler, const uint8_t *p, size_t n);
 
 #endif

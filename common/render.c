@@ -1,5 +1,5 @@
 /*
- * render.c - the tile renderer and the local thread pool (render.h).
+ * render.c - the tile renderer (render.h; the thread pool is tiles.c).
  *
  * The same code runs in the master (locally) and in every worker: a tile is
  * a rectangle of pixels, each pixel's colour comes from filter_pixel over
@@ -19,10 +19,8 @@
 #include "common/filter.h"
 #include "common/shade.h"
 
-/* Tile side when the caller passes 0. */
-#define RENDER_DEFAULT_TILE 32u
-/* Threads render_image starts at most: far more than any machine's cores,
- * small enough that a mistaken -j cannot exhaust the process. */
+/* render_ncpus at most: far more than any machine's cores, small enough
+ * that a mistaken -j cannot exhaust the process. */
 #define RENDER_MAX_THREADS 1024
 
 struct renderer {
@@ -215,98 +213,4 @@ int render_ncpus(void)
 	if (n < 1)
 		return 1;
 	return n > RENDER_MAX_THREADS ? RENDER_MAX_THREADS : (int)n;
-}
-
-uint64_t render_tile_count(uint32_t w, uint32_t h, uint32_t tile)
-{
-	if (tile == 0)
-		tile = RENDER_DEFAULT_TILE;
-	return (uint64_t)((w + tile - 1) / tile) * ((h + tile - 1) / tile);
-}
-
-/* ---- the thread pool ------------------------------------------------------ */
-
-struct pool {
-	const struct renderer *r;
-	uint32_t tile, ntx;
-	uint64_t total;
-	uint8_t *image;
-	const struct render_progress *progress;
-	atomic_int *cancel;
-	atomic_uint_fast64_t next; /* next tile to hand out */
-	pthread_mutex_t lock;      /* guards done and progress calls */
-	uint64_t done;
-};
-
-static int cancelled(const struct pool *p)
-{
-	return p->cancel && atomic_load_explicit(p->cancel, memory_order_relaxed);
-}
-
-/* One thread: takes tiles from the counter until none is left or cancelled. */
-static void *pool_run(void *arg)
-{
-	struct pool *p = arg;
-	uint8_t *buf = malloc((size_t)p->tile * p->tile * 3);
-	if (!buf)
-		return NULL; /* the other threads (and the caller's) carry on */
-	while (!cancelled(p)) {
-		uint64_t k = atomic_fetch_add(&p->next, 1);
-		if (k >= p->total)
-			break;
-		struct tile_rect t;
-		t.x = (uint32_t)(k % p->ntx) * p->tile;
-		t.y = (uint32_t)(k / p->ntx) * p->tile;
-		t.w = p->r->w - t.x < p->tile ? p->r->w - t.x : p->tile;
-		t.h = p->r->h - t.y < p->tile ? p->r->h - t.y : p->tile;
-		if (!renderer_tile_cancellable(p->r, t, buf, p->cancel))
-			break;
-		for (uint32_t j = 0; j < t.h; j++)
-			memcpy(p->image + (((size_t)t.y + j) * p->r->w + t.x) * 3, buf + (size_t)j * t.w * 3,
-			       (size_t)t.w * 3);
-		pthread_mutex_lock(&p->lock);
-		p->done++;
-		if (p->progress && p->progress->fn)
-			p->progress->fn(p->progress->arg, p->done, p->total);
-		pthread_mutex_unlock(&p->lock);
-	}
-	free(buf);
-	return NULL;
-}
-
-uint64_t render_image(const struct renderer *r, int threads, uint32_t tile, uint8_t *image,
-		      const struct render_progress *progress, atomic_int *cancel)
-{
-	struct pool p;
-	memset(&p, 0, sizeof p);
-	p.r = r;
-	p.tile = tile ? tile : RENDER_DEFAULT_TILE;
-	if (p.tile > LIM_IMAGE_SIDE)
-		p.tile = LIM_IMAGE_SIDE;
-	p.ntx = (r->w + p.tile - 1) / p.tile;
-	p.total = render_tile_count(r->w, r->h, p.tile);
-	p.image = image;
-	p.progress = progress;
-	p.cancel = cancel;
-	atomic_init(&p.next, 0);
-	pthread_mutex_init(&p.lock, NULL);
-
-	if (threads <= 0)
-		threads = render_ncpus();
-	if (threads > RENDER_MAX_THREADS)
-		threads = RENDER_MAX_THREADS;
-	if ((uint64_t)threads > p.total)
-		threads = (int)p.total;
-	pthread_t tid[RENDER_MAX_THREADS];
-	int started = 0;
-	for (int i = 1; i < threads; i++) {
-		if (pthread_create(&tid[started], NULL, pool_run, &p) != 0)
-			break; /* fewer threads: slower, same image */
-		started++;
-	}
-	pool_run(&p); /* the calling thread works too */
-	for (int i = 0; i < started; i++)
-		pthread_join(tid[i], NULL);
-	pthread_mutex_destroy(&p.lock);
-	return p.done;
 }

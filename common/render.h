@@ -65,8 +65,9 @@ struct render_progress {
 };
 /*
  * Renders the whole image into image (w*h*3, renderer_size) with `threads`
- * threads (0 = all cores) and square tiles of `tile` pixels (0 = 32), handed
- * out in row-major order. Stops early when *cancel (may be NULL) becomes
+ * threads (0 = all cores) and square tiles of `tile` pixels (0 = TILE_DEFAULT;
+ * tiles.h: the pool and the tiling every renderer shares), handed out in
+ * row-major order. Stops early when *cancel (may be NULL) becomes
  * non-zero: tiles not finished are left untouched in image (callers start
  * from black). progress may be NULL. Returns the number of tiles finished.
  */

@@ -771,7 +771,7 @@ static void on_result(struct farm *f, struct worker *w, const struct proto_msg *
 			      t->id, t->w, t->h, t->x, t->y, r->w, r->h, r->x, r->y);
 		return;
 	}
-	if (proto_crc32(0, m->u.result.pixels, (size_t)t->w * t->h * 3) != m->u.result.crc) {
+	if (crc32_update(0, m->u.result.pixels, (size_t)t->w * t->h * 3) != m->u.result.crc) {
 		f->invalid_results++;
 		worker_refuse(f, w, PERR_PROTOCOL, "tile %u failed its checksum", t->id);
 		return;

@@ -20,31 +20,6 @@
 
 /* ---- small pure helpers ---- */
 
-static uint32_t crc_table[256];
-static pthread_once_t crc_once = PTHREAD_ONCE_INIT;
-
-static void crc_init(void)
-{
-	for (uint32_t i = 0; i < 256; i++) {
-		uint32_t c = i;
-		for (int k = 0; k < 8; k++)
-			c = c & 1 ? 0xedb88320u ^ (c >> 1) : c >> 1;
-		crc_table[i] = c;
-	}
-}
-
-uint32_t proto_crc32(uint32_t crc, const uint8_t *p, size_t n)
-{
-	/* once: tracer threads call this concurrently (two threads filling the
-	 * table at once was a data race, even if they wrote the same values) */
-	pthread_once(&crc_once, crc_init);
-	const uint32_t *table = crc_table;
-	crc = ~crc;
-	for (size_t i = 0; i < n; i++)
-		crc = table[(crc ^ p[i]) & 0xff] ^ (crc >> 8);
-	return ~crc;
-}
-
 #ifndef PORTRAY_VERSION
 #define PORTRAY_VERSION "dev"
 #endif

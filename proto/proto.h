@@ -20,6 +20,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "common/crc32.h" /* tile checksums: crc32_update */
 #include "proto/buf.h"
 
 #define PROTO_MAGIC 0x50524159u /* "PRAY" */
@@ -154,8 +155,6 @@ int proto_header_parse(const uint8_t *p, size_t len, uint16_t *type, uint16_t *v
  */
 int proto_msg_decode(uint16_t type, const uint8_t *p, uint32_t len, struct proto_msg *m, const char **why);
 
-/* CRC-32 (IEEE 802.3, as zlib's crc32) of n bytes, continuing from crc (start with 0). */
-uint32_t proto_crc32(uint32_t crc, const uint8_t *p, size_t n);
 /* The core build id both sides must share for byte-identical pixels. */
 const char *proto_build_id(void);
 /* Name of a message type and of an error code, for logs. */

@@ -358,7 +358,7 @@ static void *tracer(void *arg)
 			d->job = j; /* the done entry now holds the job's reference */
 			d->tile = t;
 			d->pixels = px;
-			d->crc = proto_crc32(0, px, (size_t)t.w * t.h * 3);
+			d->crc = crc32_update(0, px, (size_t)t.w * t.h * 3);
 			push_done(d);
 			wake();
 		} else {
@@ -715,7 +715,7 @@ static void on_tile(struct wk_conn *c, const struct proto_msg *m)
 		size_t n = (size_t)t->w * t->h * 3;
 		uint8_t *px = calloc(1, n);
 		if (px) {
-			proto_send_result(c->pc, t, px, proto_crc32(0, px, n));
+			proto_send_result(c->pc, t, px, crc32_update(0, px, n));
 			c->tiles_done++;
 		}
 		free(px);

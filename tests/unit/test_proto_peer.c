@@ -427,7 +427,7 @@ static void test_back_pressure(pid_t pid)
 	uint32_t got = 0, good = 0;
 	while (got < N && next_real(c, &m) && m.type == MSG_TILE_RESULT) {
 		size_t n = (size_t)m.u.result.tile.w * m.u.result.tile.h * 3;
-		good += m.u.result.tile.w == SIDE && proto_crc32(0, m.u.result.pixels, n) == m.u.result.crc;
+		good += m.u.result.tile.w == SIDE && crc32_update(0, m.u.result.pixels, n) == m.u.result.crc;
 		got++;
 	}
 	CHECK(got == N && good == N);
@@ -558,7 +558,7 @@ int main(void)
 		renderer_tile(r, rect, px);
 		size_t n = (size_t)t->w * t->h * 3;
 		same += t->id >= 7 && t->id <= 9 && memcmp(px, m.u.result.pixels, n) == 0 &&
-			proto_crc32(0, px, n) == m.u.result.crc;
+			crc32_update(0, px, n) == m.u.result.crc;
 		got++;
 	}
 	CHECK(got == 3 && same == 3);
