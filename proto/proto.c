@@ -24,7 +24,7 @@
 #define PORTRAY_VERSION "dev"
 #endif
 /* the versions as plain numbers for the build id (the header constants carry a u suffix) */
-#define PROTO_BUILD_PROTO 1
+#define PROTO_BUILD_PROTO 2
 #define PROTO_BUILD_SCENE 1
 _Static_assert(PROTO_BUILD_PROTO == PROTO_VERSION && PROTO_BUILD_SCENE == PROTO_SCENE_VERSION, "build id numbers");
 #define STR2(x) #x
@@ -60,6 +60,44 @@ const char *proto_build_id(void)
 		PROTO_BUILD_SCENE) "/pixels-" STR(PROTO_BUILD_PIXELS) "/" BUILD_CC "/" BUILD_ARCH;
 	_Static_assert(sizeof id - 1 <= LIM_BUILD_ID, "the build id fits HELLO");
 	return id;
+}
+
+int proto_hello_check(const struct proto_msg *m, enum proto_role want, bool have_secret, uint32_t my_version,
+		      char *why, size_t whylen)
+{
+	const struct proto_hello *h = &m->u.hello;
+	const char *peer = want == ROLE_MASTER ? "master" : "worker";
+	const char *me = want == ROLE_MASTER ? "worker" : "master";
+	if (h->version != my_version || m->frame_version != my_version) {
+		snprintf(why, whylen, "protocol version mismatch: the %s speaks version %u, this %s speaks %u", peer,
+			 h->version, me, my_version);
+		return PERR_VERSION;
+	}
+	if (h->role != want) {
+		snprintf(why, whylen, "peer is not a %s", peer);
+		return PERR_PROTOCOL;
+	}
+	if (strcmp(h->build, proto_build_id()) != 0) {
+		snprintf(why, whylen, "core build mismatch: the %s runs '%s', this %s runs '%s'", peer, h->build, me,
+			 proto_build_id());
+		return PERR_BUILD;
+	}
+	if (h->secret && !have_secret) {
+		snprintf(why, whylen, want == ROLE_WORKER ? "the worker requires a shared secret: give --secret-file"
+							  : "this worker has no shared secret but the master has one");
+		return PERR_AUTH;
+	}
+	if (!h->secret && have_secret) {
+		snprintf(why, whylen, want == ROLE_WORKER ? "the worker has no shared secret, this master has one"
+							  : "this worker requires a shared secret (--secret-file)");
+		return PERR_AUTH;
+	}
+	if (want == ROLE_MASTER && (h->heartbeat_ms < PROTO_HB_MIN_MS || h->heartbeat_ms > PROTO_HB_MAX_MS)) {
+		snprintf(why, whylen, "heartbeat interval %u ms outside %u..%u", h->heartbeat_ms, PROTO_HB_MIN_MS,
+			 PROTO_HB_MAX_MS);
+		return PERR_PROTOCOL;
+	}
+	return 0;
 }
 
 const char *proto_type_name(int type)

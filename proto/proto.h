@@ -24,7 +24,10 @@
 #include "proto/buf.h"
 
 #define PROTO_MAGIC 0x50524159u /* "PRAY" */
-#define PROTO_VERSION 1u
+/* 2: heartbeat interval agreed at the handshake (no clamp), the master's
+ * OFFER pipelined behind its HELLO or AUTH, TILE and CANCEL accepted while
+ * the worker builds */
+#define PROTO_VERSION 2u
 #define PROTO_HEADER_BYTES 12
 #define PROTO_DEFAULT_PORT 7411
 #define PROTO_NONCE_BYTES 32
@@ -50,6 +53,21 @@
 #define LIM_HANDSHAKE_PAYLOAD 1024u
 /* the longest frame a master sends: a full SCENE_DATA (u64 offset + chunk) */
 #define PROTO_MASTER_FRAME_MAX (8u + PROTO_CHUNK_BYTES)
+/*
+ * Heartbeats. The master's HELLO names the interval at which both sides send
+ * them: a quarter of its --heartbeat-timeout, so any timeout works with
+ * tiles and builds of any length. The master drops a worker silent for the
+ * timeout (4 intervals); a worker drops a master silent for
+ * proto_hb_deadline(interval), more patient since losing a master ends its
+ * job while keeping one costs nothing. A HELLO outside these bounds is refused.
+ */
+#define PROTO_HB_MIN_MS 50u
+#define PROTO_HB_MAX_MS (6u * 3600 * 1000)
+static inline double proto_hb_deadline(double interval_s)
+{
+	double d = 6 * interval_s + 5;
+	return d < 30 ? 30 : d;
+}
 /* bytes a connection may have waiting to be sent before the sender pauses */
 #define PROTO_OUT_HIGH_WATER (4u * 1024 * 1024)
 
@@ -157,6 +175,17 @@ int proto_msg_decode(uint16_t type, const uint8_t *p, uint32_t len, struct proto
 
 /* The core build id both sides must share for byte-identical pixels. */
 const char *proto_build_id(void);
+/*
+ * The one HELLO check, both sides: m is the peer's HELLO; `want` the role the
+ * peer must have; have_secret whether this side holds a shared secret;
+ * my_version the version this side speaks (PROTO_VERSION but for a test
+ * hook). Checks the frame's and the payload's versions, the role, the build
+ * id, that both sides agree on having a secret and (from a master) the
+ * heartbeat interval. Returns 0, or a PERR_ code with a message in why that
+ * names both sides' views, for the ERROR reply and the log.
+ */
+int proto_hello_check(const struct proto_msg *m, enum proto_role want, bool have_secret, uint32_t my_version,
+		      char *why, size_t whylen);
 /* Name of a message type and of an error code, for logs. */
 const char *proto_type_name(int type);
 const char *proto_err_name(int code);
