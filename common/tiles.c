@@ -6,6 +6,7 @@
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 /* Threads a pool starts at most: far more than any machine's cores, small
  * enough that a mistaken -j cannot exhaust the process. */
@@ -61,7 +62,11 @@ static void *pool_thread(void *arg)
 			src->done(src->ctx, &w, &buf, -1);
 			continue;
 		}
+		struct timespec t0, t1;
+		clock_gettime(CLOCK_MONOTONIC, &t0);
 		int ok = renderer_tile_cancellable(w.r, w.rect, buf, w.cancel);
+		clock_gettime(CLOCK_MONOTONIC, &t1);
+		w.trace_s = (double)(t1.tv_sec - t0.tv_sec) + (t1.tv_nsec - t0.tv_nsec) * 1e-9;
 		src->done(src->ctx, &w, &buf, ok);
 		if (!buf)
 			cap = 0;
@@ -139,7 +144,7 @@ static int image_take(void *ctx, struct tile_work *w)
 	uint64_t k = atomic_fetch_add(&s->next, 1);
 	if (k >= s->tg.n)
 		return 0;
-	*w = (struct tile_work){ s->r, tiling_rect(&s->tg, (uint32_t)k), s->cancel, k, NULL };
+	*w = (struct tile_work){ s->r, tiling_rect(&s->tg, (uint32_t)k), s->cancel, k, NULL, 0 };
 	return 1;
 }
 

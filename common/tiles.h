@@ -43,6 +43,7 @@ struct tile_work {
 	atomic_int *cancel;     /* the tile is abandoned when it becomes non-zero; may be NULL */
 	uint64_t id;            /* the source's own: tile index, ... */
 	void *ptr;              /* the source's own: job, ... */
+	double trace_s;         /* set by the pool before done: wall time spent tracing */
 };
 
 /* Where a pool's tiles come from and where their pixels go. */

@@ -292,6 +292,7 @@ int proto_msg_decode(uint16_t type, const uint8_t *p, uint32_t len, struct proto
 	case MSG_TILE_RESULT:
 		get_tile(&r, &m->u.result.tile);
 		m->u.result.crc = proto_get_u32(&r);
+		m->u.result.trace_us = proto_get_u32(&r);
 		if (r.err)
 			break;
 		if (!tile_ok(&m->u.result.tile)) {
@@ -577,9 +578,16 @@ int proto_send_tile(struct proto_conn *c, const struct proto_tile *t)
 
 int proto_send_result(struct proto_conn *c, const struct proto_tile *t, const uint8_t *pixels, uint32_t crc)
 {
+	return proto_send_result_timed(c, t, pixels, crc, 0);
+}
+
+int proto_send_result_timed(struct proto_conn *c, const struct proto_tile *t, const uint8_t *pixels, uint32_t crc,
+			    uint32_t trace_us)
+{
 	size_t at = frame_begin(c, MSG_TILE_RESULT);
 	put_tile(&c->out, t);
 	proto_put_u32(&c->out, crc);
+	proto_put_u32(&c->out, trace_us);
 	proto_put_bytes(&c->out, pixels, (size_t)t->w * t->h * 3);
 	return frame_end(c, at);
 }

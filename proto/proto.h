@@ -144,6 +144,7 @@ struct proto_msg {
 		struct {
 			struct proto_tile tile;
 			uint32_t crc;
+			uint32_t trace_us;     /* the worker's time tracing it (0: not measured) */
 			const uint8_t *pixels; /* tile.w * tile.h * 3 bytes */
 		} result;
 		struct {
@@ -234,6 +235,10 @@ int proto_send_data(struct proto_conn *c, uint64_t offset, const uint8_t *p, uin
 int proto_send_ready(struct proto_conn *c, const uint8_t hash[PROTO_HASH_BYTES], bool cached, uint32_t build_ms);
 int proto_send_tile(struct proto_conn *c, const struct proto_tile *t);
 int proto_send_result(struct proto_conn *c, const struct proto_tile *t, const uint8_t *pixels, uint32_t crc);
+/* With the time the tile took to trace, microseconds (the master sizes its
+ * window of tiles in flight from it); proto_send_result sends 0, unknown. */
+int proto_send_result_timed(struct proto_conn *c, const struct proto_tile *t, const uint8_t *pixels, uint32_t crc,
+			    uint32_t trace_us);
 int proto_send_heartbeat(struct proto_conn *c, uint32_t done, uint32_t queued);
 int proto_send_cancel(struct proto_conn *c, uint32_t id);
 int proto_send_error(struct proto_conn *c, int code, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
