@@ -36,6 +36,12 @@ obj = $(patsubst %.c,$(BUILD)/%.o,$(1))
 LIBCORE  := $(BUILD)/libportray.a
 CORE_OBJ := $(call obj,$(COMMON_SRC) $(PROTO_SRC))
 
+# the master's and the worker's rooms but main, as libraries: unit tests link them
+LIBMASTER := $(BUILD)/libmaster.a
+LIBWORKER := $(BUILD)/libworker.a
+MASTER_LIB_OBJ := $(call obj,$(filter-out master/main.c,$(MASTER_SRC)))
+WORKER_LIB_OBJ := $(call obj,$(filter-out worker/main.c,$(WORKER_SRC)))
+
 MASTER_BIN := bin/portray-master
 WORKER_BIN := bin/portray-worker
 UNIT_BIN   := $(patsubst tests/unit/%.c,$(BUILD)/tests/%,$(UNIT_SRC))
@@ -55,15 +61,23 @@ $(LIBCORE): $(CORE_OBJ)
 	@mkdir -p $(dir $@)
 	rm -f $@ && $(AR) rcs $@ $^
 
-$(MASTER_BIN): $(call obj,$(MASTER_SRC)) $(LIBCORE)
+$(LIBMASTER): $(MASTER_LIB_OBJ)
+	@mkdir -p $(dir $@)
+	rm -f $@ && $(AR) rcs $@ $^
+
+$(LIBWORKER): $(WORKER_LIB_OBJ)
+	@mkdir -p $(dir $@)
+	rm -f $@ && $(AR) rcs $@ $^
+
+$(MASTER_BIN): $(BUILD)/master/main.o $(LIBMASTER) $(LIBCORE)
 	@mkdir -p bin
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
-$(WORKER_BIN): $(call obj,$(WORKER_SRC)) $(LIBCORE)
+$(WORKER_BIN): $(BUILD)/worker/main.o $(LIBWORKER) $(LIBCORE)
 	@mkdir -p bin
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
-$(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIBCORE)
+$(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIBMASTER) $(LIBWORKER) $(LIBCORE)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
