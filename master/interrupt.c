@@ -63,6 +63,27 @@ static void term_raw(void)
 
 static void at_exit_restore(void) { term_restore(); }
 
+/* who to tell when *g_cancel is set (interrupt_on_cancel); called from a
+ * signal handler: must be async-signal-safe (ev_wake is one write) */
+static void (*volatile g_wake)(void *);
+static void *volatile g_wake_arg;
+
+static void cancelled(void)
+{
+	int e = errno;
+	void (*fn)(void *) = g_wake;
+	if (fn)
+		fn(g_wake_arg);
+	errno = e;
+}
+
+void interrupt_on_cancel(void (*fn)(void *), void *arg)
+{
+	g_wake = NULL;
+	g_wake_arg = arg;
+	g_wake = fn;
+}
+
 static void on_sigint(int sig)
 {
 	if (atomic_fetch_add(&g_sigints, 1) > 0) { /* a second Ctrl-C: die the usual way */
@@ -74,6 +95,7 @@ static void on_sigint(int sig)
 	g_reason = INTERRUPT_SIGNAL;
 	if (g_cancel)
 		atomic_store(g_cancel, 1);
+	cancelled();
 }
 
 static void on_fatal(int sig)
@@ -167,6 +189,7 @@ static void *key_thread(void *arg)
 			int none = INTERRUPT_NONE;
 			atomic_compare_exchange_strong(&g_reason, &none, INTERRUPT_KEY);
 			atomic_store(g_cancel, 1);
+			cancelled();
 			break;
 		}
 	}

@@ -27,6 +27,12 @@ enum interrupt_reason {
  * watching.
  */
 int interrupt_start(atomic_int *cancel, bool keys);
+/*
+ * fn(arg) is called right after *cancel is set (from the signal handler or
+ * the key thread), so an event loop can wake up at once: it must be
+ * async-signal-safe. NULL: nobody.
+ */
+void interrupt_on_cancel(void (*fn)(void *), void *arg);
 /* Stops watching; restores the terminal and the previous signal handlers. */
 void interrupt_stop(void);
 /* Why *cancel was set, if by us. */

@@ -25,7 +25,7 @@ struct master_opts {
 	const char *out;       /* -o FILE, default: scene name with .png */
 	bool check;            /* --check: parse and summarise only */
 	int threads;           /* -j N, 0 = all cores */
-	uint32_t tile;         /* --tile N, default 32 */
+	uint32_t tile;         /* --tile N, 0 = TILE_DEFAULT (common/tiles.h) */
 	uint32_t width, height; /* --size WxH, 0 = from the image statement */
 	bool quiet;            /* -q */
 	const char *workers;   /* -w HOST:PORT[,HOST:PORT...] */

@@ -17,6 +17,7 @@
 #include "master/interrupt.h"
 #include "master/master.h"
 #include "master/progress.h"
+#include "proto/serial.h"
 
 /*
  * Default output: the scene file's name without directory and extension,
@@ -45,8 +46,10 @@ static char *default_output(const char *scene)
 
 int master_render(const struct master_opts *o)
 {
-	struct scene *s = NULL;
+	struct scene *s = NULL, *ds = NULL;
 	struct renderer *r = NULL;
+	uint8_t *enc = NULL;
+	size_t enc_len = 0;
 	uint8_t *image = NULL;
 	char *out_alloc = NULL;
 	struct scene_error err;
@@ -63,11 +66,33 @@ int master_render(const struct master_opts *o)
 	master_filter_warnings(&s->camera);
 	double t_parse = progress_now();
 
-	rc = renderer_new(s, &r, &err);
+	/* one road for pixels: the scene is encoded as for the wire and the
+	 * renderer built from its decoding, locally as on the farm, so every
+	 * pixel comes from what a worker would receive (a serializer defect
+	 * shows in any local render, not as a worker "lying") */
+	if (proto_scene_encode(s, &enc, &enc_len) < 0) {
+		fprintf(stderr, "portray-master: out of memory encoding the scene\n");
+		rc = ERRLEVEL_FATAL;
+		goto done;
+	}
+	rc = proto_scene_decode(enc, enc_len, &ds, &err);
 	if (rc) {
+		fprintf(stderr, "portray-master: internal error: the scene does not survive its encoding: %s\n", err.msg);
+		rc = ERRLEVEL_FATAL;
+		goto done;
+	}
+	rc = renderer_new(ds, &r, &err);
+	if (rc) {
+		/* the decoded scene names no files: say it with the parsed one's locations */
+		struct renderer *r2 = NULL;
+		if (renderer_new(s, &r2, &err) == 0)
+			snprintf(err.msg, sizeof err.msg, "portray-master: cannot build the scene's acceleration");
+		renderer_free(r2);
 		fprintf(stderr, "%s\n", err.msg);
 		goto done;
 	}
+	scene_free(s); /* the decoded scene is the one in use from here on */
+	s = NULL;
 	if (o->width && renderer_set_size(r, o->width, o->height) < 0) {
 		fprintf(stderr, "portray-master: --size %ux%u is too large (at most %llu pixels)\n",
 			o->width, o->height, (unsigned long long)LIM_IMAGE_PIXELS);
@@ -96,13 +121,13 @@ int master_render(const struct master_opts *o)
 
 	atomic_int cancel;
 	atomic_init(&cancel, 0);
-	interrupt_start(&cancel, !s->image.nonstop);
+	interrupt_start(&cancel, !ds->image.nonstop);
 	watching = true;
 	uint64_t total = render_tile_count(w, h, o->tile), finished = 0;
 	int threads = o->threads > 0 ? o->threads : render_ncpus();
 	bool farm = o->workers || o->workers_file;
 	if (farm) {
-		rc = farm_render(o, s, r, w, h, image, &cancel);
+		rc = farm_render(o, enc, enc_len, t_build - t_parse, r, w, h, image, &cancel);
 		if (rc && !atomic_load(&cancel))
 			goto done; /* farm_render said why */
 		rc = 0;
@@ -152,6 +177,8 @@ done:
 	free(image);
 	free(out_alloc);
 	renderer_free(r);
+	scene_free(ds);
 	scene_free(s);
+	free(enc);
 	return rc;
 }

@@ -1,0 +1,142 @@
+/*
+ * farm_int.h - the farm's rooms and what they share (master/farm.c:
+ * orchestration, local threads, progress and summary; master/wconn.c: the
+ * connection to one worker; master/sched.c: the tiles).
+ */
+#ifndef PORTRAY_FARM_INT_H
+#define PORTRAY_FARM_INT_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "master/farm.h"
+#include "master/sched.h"
+#include "master/workers.h"
+#include "proto/evloop.h"
+#include "proto/proto.h"
+
+/* reconnection attempts after a lost connection, with back-off 0.5 s, 1 s, 2 s ... */
+#define FARM_MAX_RETRIES 3
+#define FARM_BACKOFF_S 0.5
+/* tiles in flight per worker at most: the worker's own queue bound */
+#define FARM_DEPTH_MAX LIM_TILES_QUEUED
+/* result bytes a worker's window may stand for at most (memory, both sides) */
+#define FARM_WINDOW_BYTES (64u * 1024 * 1024)
+/* tile latencies kept per worker for its median (the hung-tile deadline) */
+#define FARM_LAT_KEEP 31
+/* hung-tile deadline: this many median tile latencies ... */
+#define FARM_HANG_MEDIANS 10.0
+/* ... but never less than this many heartbeat timeouts */
+#define FARM_HANG_HB 3.0
+/* before a worker's first result (no median yet): this many heartbeat timeouts */
+#define FARM_HANG_HB_FIRST 10.0
+/* a worker's scene build may take this many heartbeat timeouts ... */
+#define FARM_BUILD_HB 10.0
+/* ... plus this many times the master's own build of the same scene */
+#define FARM_BUILD_LOCAL 20.0
+
+enum wstate {
+	W_IDLE,       /* not connected (waiting for a retry, or dropped) */
+	W_CONNECTING, /* TCP connect in progress */
+	W_HELLO,      /* our HELLO (and, without a secret, our OFFER) sent: waiting for the worker's HELLO */
+	W_AUTH,       /* our proof and OFFER sent: waiting for the worker's proof */
+	W_OFFER,      /* waiting for HAVE or NEED */
+	W_SENDING,    /* streaming scene chunks */
+	W_BUILDING,   /* whole scene sent: waiting for SCENE_READY (first tiles already sent) */
+	W_READY,      /* tracing tiles */
+	W_DONE        /* BYE sent */
+};
+
+struct farm;
+
+struct worker {
+	struct farm *f;
+	struct worker_addr addr;
+	const char *name;
+	uint16_t index;
+	enum wstate state;
+	struct proto_conn *pc;
+	int fd;                 /* registered with the loop, or -1 */
+	struct ev_timer tm;     /* the next of: state deadline, liveness, hung tile, heartbeat, retry */
+	double state_at;        /* when the current state began */
+	double deadline;        /* when the current state must be left (0: none) */
+	double last_rx;         /* last whole frame where it counts as life (W_BUILDING, W_READY) */
+	double last_hb;         /* our last heartbeat */
+	double retry_at;
+	int retries;
+	bool dropped;           /* for good */
+	char why[300];          /* why it was last lost or dropped */
+	uint8_t nonce[PROTO_NONCE_BYTES], peer_nonce[PROTO_NONCE_BYTES];
+	uint32_t threads;
+	uint32_t depth;         /* its window: tiles in flight at most */
+	uint64_t sent_off;      /* scene bytes queued so far */
+	/* tiles in flight on this connection, with when each was sent */
+	uint32_t *inflight;
+	double *sent_at;
+	uint32_t n_inflight;
+	uint32_t *cancelled;    /* cancelled ids that may still be answered */
+	uint32_t n_cancelled;
+	double busy_since;      /* when n_inflight last went from 0 to 1 */
+	double last_result;     /* when its last valid result arrived */
+	double lat[FARM_LAT_KEEP]; /* recent tile latencies (sent to result), a ring */
+	uint32_t n_lat;
+	double median;          /* their median, 0 before the first */
+	/* the window: round trip and trace time per tile */
+	double offer_at;        /* when our OFFER left (the reply measures a round trip) */
+	double rtt;             /* seconds, 0 until measured */
+	double svc;             /* mean trace time of one tile on one of its threads, 0 until known */
+	uint32_t delivered;     /* tiles it delivered that were used or audited */
+	/* statistics over all connections */
+	uint32_t tiles_done;
+	uint64_t bytes_out, bytes_in, scene_bytes;
+	bool cache_hit;
+	int connections;
+	double rate_t0;
+	uint32_t rate_n0;
+	double rate;            /* tiles/s over the last second */
+};
+
+struct farm {
+	const struct master_opts *o;
+	struct ev_loop *loop;
+	struct sched *s;
+	struct tiling tg;
+	struct worker *w;
+	uint32_t n_w;
+	const uint8_t *scene;   /* encoded scene */
+	size_t scene_len;
+	uint8_t hash[PROTO_HASH_BYTES];
+	uint32_t width, height;
+	uint8_t *secret;
+	size_t secret_len;
+	double hb_timeout, hb_interval;
+	double build_s;         /* the master's own build of the scene (the workers' build deadline) */
+	atomic_int *cancel;
+	bool tty;
+	double t0;
+	struct ev_timer progress;
+	uint32_t invalid_results;
+	int rc;                 /* the loop's verdict */
+};
+
+/* farm.c */
+void farm_log(const struct farm *f, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* Whether the render can go on: ends the loop (rc EXIT_NO_WORKERS) when
+ * --no-local and no worker is left. */
+void farm_check_alive(struct farm *f);
+
+/* wconn.c */
+int worker_init(struct farm *f, struct worker *w, const struct worker_addr *a, uint16_t index);
+void worker_free(struct worker *w);
+/* Starts (or restarts) the connection. */
+void worker_start(struct worker *w);
+/* Tops up w's tiles in flight (when it takes tiles). */
+void worker_dispatch(struct worker *w);
+/* Drops w if an audit caught it, and says so. */
+void worker_check_caught(struct worker *w);
+/* BYE to a connected worker (the farm then flushes and frees). */
+void worker_bye(struct worker *w);
+/* Closes w's connection; its tiles in flight go back to the queue. */
+void worker_close(struct worker *w);
+
+#endif
