@@ -1,6 +1,6 @@
 # portray: one Makefile, no configure step.
 #   make              build bin/portray-master and bin/portray-worker
-#   make test         build and run every test (ends with "N passed, N failed")
+#   make test         build and run every test (ends with "N passed, N failed, N skipped")
 #   make bench        print speed and memory figures
 #   make fuzz         run the libFuzzer targets (clang)  FUZZ_SECONDS=600
 #   make install      PREFIX=/usr/local DESTDIR=
