@@ -1,6 +1,6 @@
 # portray: one Makefile, no configure step.
 #   make              build bin/portray-master and bin/portray-worker
-#   make test         build and run every test (ends with "N passed, N failed")
+#   make test         build and run every test (ends with "N passed, N failed, N skipped")
 #   make bench        print speed and memory figures
 #   make fuzz         run the libFuzzer targets (clang)  FUZZ_SECONDS=600
 #   make install      PREFIX=/usr/local DESTDIR=
@@ -30,6 +30,7 @@ WORKER_SRC := $(wildcard worker/*.c)
 UNIT_SRC   := $(wildcard tests/unit/test_*.c)
 FUZZ_SRC   := $(wildcard tests/fuzz/fuzz_*.c)
 BENCH_SRC  := $(wildcard bench/bench_*.c)
+TOOLS_SRC  := $(wildcard tests/tools/*.c)
 
 obj = $(patsubst %.c,$(BUILD)/%.o,$(1))
 
@@ -47,6 +48,7 @@ WORKER_BIN := bin/portray-worker
 UNIT_BIN   := $(patsubst tests/unit/%.c,$(BUILD)/tests/%,$(UNIT_SRC))
 FUZZ_REPLAY:= $(patsubst tests/fuzz/%.c,$(BUILD)/tests/%-replay,$(FUZZ_SRC))
 BENCH_BIN  := $(patsubst bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
+TOOLS_BIN  := $(patsubst tests/tools/%.c,$(BUILD)/tools/%,$(TOOLS_SRC))
 
 .PHONY: all test bench fuzz install uninstall clean
 # keep test and fuzz objects (chained pattern rules would delete them as intermediates)
@@ -90,10 +92,15 @@ $(BUILD)/bench/%: $(BUILD)/bench/%.o $(LIBCORE)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
-test: all $(UNIT_BIN) $(FUZZ_REPLAY)
+# test tools (tests/tools/*.c): delayproxy, fakepeer
+$(BUILD)/tools/%: $(BUILD)/tests/tools/%.o $(LIBCORE)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+test: all $(UNIT_BIN) $(FUZZ_REPLAY) $(TOOLS_BIN)
 	@BUILD=$(BUILD) sh tests/run.sh
 
-bench: all $(BENCH_BIN)
+bench: all $(BENCH_BIN) $(TOOLS_BIN)
 	@BUILD=$(BUILD) sh bench/run.sh
 
 # libFuzzer builds live under build/fuzz with clang; each target runs FUZZ_SECONDS.

@@ -1,11 +1,12 @@
 #!/bin/sh
 # render_keys.sh - on a terminal (a pty from script(1)), q and Esc end a render
 # early and write the finished part (exit 0), the terminal gets its canonical
-# mode and echo back; with image `nonstop` keys are ignored.
+# mode and echo back; with image `nonstop` keys are ignored. Skipped (exit 77)
+# without script(1), which provides the terminal.
 . tests/cli/render_lib.inc
 if ! command -v script >/dev/null 2>&1; then
-	echo "script(1) not installed: skipped"
-	exit 0
+	echo "script(1) not installed"
+	exit 77
 fi
 # on_tty KEYS DELAY LOG COMMAND: runs COMMAND on a pty, typing KEYS after DELAY s
 on_tty() {
