@@ -16,6 +16,7 @@ struct ftile {
 	uint8_t done;
 	uint8_t queued;        /* in the pending queue */
 	uint8_t audit_queued;  /* in the audit queue */
+	uint8_t taken;         /* handed out before: taking it again is a redispatch */
 	uint16_t holder[2];    /* who traces it now (SCHED_NONE = free slot) */
 	uint16_t by;           /* who wrote the stored pixels (when done) */
 	uint16_t claim_by;     /* who delivered claim */
@@ -43,6 +44,8 @@ struct sched {
 	uint8_t *image;
 	double audit;
 	uint64_t salt;
+	double now;            /* the latest time sched_take was given: local takes
+				* are stamped with it (sched_local_take has no clock) */
 	atomic_int stop;
 	void (*wake)(void *);
 	void *wake_arg;
@@ -145,10 +148,12 @@ static uint32_t take_locked(struct sched *s, uint16_t who, bool dup_ok, double n
 		t->queued = 0;
 		if (t->done || holds(t, who))
 			continue;
-		if (t->sent > 0)
+		if (t->taken) {
 			s->st.redispatched++;
-		else
+		} else {
+			t->taken = 1;
 			t->sent = now;
+		}
 		holder_add(t, who);
 		return id;
 	}
@@ -252,6 +257,18 @@ static bool trusted_locked(struct sched *s, uint32_t id, const uint8_t *rgb)
 	return true;
 }
 
+/* Queues the audit of tile id's claim unless it is queued already. */
+static void audit_queue_locked(struct sched *s, uint32_t id)
+{
+	struct ftile *t = &s->t[id];
+	if (!t->audit_queued) {
+		s->audits[(s->a_head + s->a_len) % s->tg.n] = id;
+		s->a_len++;
+		t->audit_queued = 1;
+		pthread_cond_broadcast(&s->cv);
+	}
+}
+
 /* Holds who's pixels as a claim (copied) and queues the audit; false when
  * out of memory (nothing changed). */
 static bool claim_locked(struct sched *s, uint32_t id, uint16_t who, const uint8_t *rgb)
@@ -266,12 +283,7 @@ static bool claim_locked(struct sched *s, uint32_t id, uint16_t who, const uint8
 	holder_del(t, who);
 	t->claim = copy;
 	t->claim_by = who;
-	if (!t->audit_queued) {
-		s->audits[(s->a_head + s->a_len) % s->tg.n] = id;
-		s->a_len++;
-		t->audit_queued = 1;
-	}
-	pthread_cond_broadcast(&s->cv);
+	audit_queue_locked(s, id);
 	return true;
 }
 
@@ -296,6 +308,8 @@ uint32_t sched_take(struct sched *s, uint16_t who, bool dup_ok, double now)
 {
 	pthread_mutex_lock(&s->mu);
 	uint32_t id = SCHED_NO_TILE;
+	if (now > s->now)
+		s->now = now;
 	if (!atomic_load(&s->stop) && !(who < s->n_workers && s->trust[who].t.caught))
 		id = take_locked(s, who, dup_ok, now);
 	pthread_mutex_unlock(&s->mu);
@@ -390,7 +404,7 @@ int sched_local_take(struct sched *s, bool audit_only, uint32_t *id, bool *audit
 		*id = take_audit_locked(s);
 		if (*id == SCHED_NO_TILE && !audit_only) {
 			*audit = false;
-			*id = take_locked(s, SCHED_LOCAL, true, 0);
+			*id = take_locked(s, SCHED_LOCAL, true, s->now);
 		}
 		if (*id != SCHED_NO_TILE) {
 			pthread_mutex_unlock(&s->mu);
@@ -409,20 +423,23 @@ void sched_local_done(struct sched *s, uint32_t id, bool audit, const uint8_t *r
 	if (audit) {
 		if (ok) {
 			trusted_locked(s, id, rgb);
-		} else if (t->claim && !t->audit_queued) {
+		} else if (t->claim) {
 			/* abandoned (stopping, or no buffer): a claim must not wait for ever */
-			s->audits[(s->a_head + s->a_len) % s->tg.n] = id;
-			s->a_len++;
-			t->audit_queued = 1;
+			audit_queue_locked(s, id);
 		}
 	} else {
 		holder_del(t, SCHED_LOCAL);
-		if (!ok)
+		if (!ok) {
 			requeue_locked(s, id);
-		else if (trusted_locked(s, id, rgb))
+			/* a claim on it skipped its audit while this thread traced
+			 * the tile anyway (take_audit_locked): it needs one now */
+			if (t->claim)
+				audit_queue_locked(s, id);
+		} else if (trusted_locked(s, id, rgb)) {
 			s->st.local_done++;
-		else
+		} else {
 			s->st.dup_wasted++;
+		}
 	}
 	pthread_mutex_unlock(&s->mu);
 }

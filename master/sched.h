@@ -68,7 +68,8 @@ void sched_free(struct sched *s);
 /*
  * Pops a pending tile for worker who, or (dup_ok: the worker is idle near the
  * end) a duplicate of the oldest outstanding tile held by one other taker.
- * now is the time of handing out. The tile id, or SCHED_NO_TILE.
+ * now is the time of handing out (a local thread's take counts as made at
+ * the latest now given here). The tile id, or SCHED_NO_TILE.
  */
 uint32_t sched_take(struct sched *s, uint16_t who, bool dup_ok, double now);
 /* who gives up its hold on tile id (lost connection, refused result):
