@@ -89,6 +89,8 @@ struct sched *sched_new(const struct tiling *tg, uint32_t n_workers, uint8_t *im
 	if (!s)
 		return NULL;
 	s->tg = *tg;
+	pthread_mutex_init(&s->mu, NULL); /* first: sched_free destroys them whatever failed below */
+	pthread_cond_init(&s->cv, NULL);
 	uint32_t n = tg->n;
 	s->t = calloc(n, sizeof *s->t);
 	s->queue = calloc(n, sizeof *s->queue);
@@ -112,8 +114,6 @@ struct sched *sched_new(const struct tiling *tg, uint32_t n_workers, uint8_t *im
 	s->wake = wake;
 	s->wake_arg = wake_arg;
 	atomic_init(&s->stop, 0);
-	pthread_mutex_init(&s->mu, NULL);
-	pthread_cond_init(&s->cv, NULL);
 	return s;
 }
 
@@ -121,12 +121,10 @@ void sched_free(struct sched *s)
 {
 	if (!s)
 		return;
-	if (s->t) {
-		for (uint32_t i = 0; i < s->tg.n; i++)
-			free(s->t[i].claim);
-		pthread_mutex_destroy(&s->mu);
-		pthread_cond_destroy(&s->cv);
-	}
+	for (uint32_t i = 0; s->t && i < s->tg.n; i++)
+		free(s->t[i].claim);
+	pthread_mutex_destroy(&s->mu);
+	pthread_cond_destroy(&s->cv);
 	free(s->t);
 	free(s->queue);
 	free(s->audits);

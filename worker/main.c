@@ -202,6 +202,7 @@ struct wk_done {
 	struct proto_tile tile;
 	uint8_t *pixels;      /* owned */
 	uint32_t crc;
+	uint32_t trace_us;
 	int ok;
 	struct wk_entry *entry;
 	struct wk_done *next;
@@ -332,7 +333,9 @@ static void *tracer(void *arg)
 		int ok = 0;
 		if (d && px) {
 			struct tile_rect rect = { t.x, t.y, t.w, t.h };
+			double t0 = net_now();
 			ok = renderer_tile_cancellable(r, rect, px, &pool.cancel_all);
+			d->trace_us = (uint32_t)((net_now() - t0) * 1e6) + 1;
 			if (opt.fault == FAULT_TRACE_FAIL)
 				ok = 0;
 			if (opt.fault == FAULT_LIE || opt.fault == FAULT_HANG_TILE) {
@@ -935,7 +938,7 @@ static void drain_done(void)
 					crc ^= 0x5a5a5a5au;
 				if (opt.fault == FAULT_WRONG_SIZE && t.w > 1)
 					t.w -= 1; /* pixels then match the smaller rect */
-				proto_send_result(c->pc, &t, d->pixels, crc);
+				proto_send_result_timed(c->pc, &t, d->pixels, crc, d->trace_us);
 				c->tiles_done++;
 			}
 			free(d->pixels);
