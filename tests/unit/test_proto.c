@@ -165,50 +165,50 @@ static void test_bad_frames(void)
 	struct proto_msg m;
 	int code = 0;
 	const char *why = "";
-	put_header(f, 0x47455420, 1, MSG_BYE, 0); /* "GET " */
+	put_header(f, 0x47455420, PROTO_VERSION, MSG_BYE, 0); /* "GET " */
 	CHECK(raw_frame(f, 12, &m, &code, &why) == -1 && code == PERR_PROTOCOL && strstr(why, "magic"));
-	put_header(f, PROTO_MAGIC, 1, MSG_SCENE_DATA, LIM_FRAME_PAYLOAD + 1);
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_SCENE_DATA, LIM_FRAME_PAYLOAD + 1);
 	CHECK(raw_frame(f, 12, &m, &code, &why) == -1 && code == PERR_LIMIT);
-	put_header(f, PROTO_MAGIC, 1, 99, 0);
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, 99, 0);
 	CHECK(raw_frame(f, 12, &m, &code, &why) == -1 && strstr(why, "unknown message type"));
 	/* a frame of another version: only HELLO and ERROR are decoded */
-	put_header(f, PROTO_MAGIC, 2, MSG_BYE, 0);
+	put_header(f, PROTO_MAGIC, PROTO_VERSION + 1, MSG_BYE, 0);
 	CHECK(raw_frame(f, 12, &m, &code, &why) == -1 && code == PERR_VERSION);
-	put_header(f, PROTO_MAGIC, 2, MSG_ERROR, 2 + 4 + 2);
+	put_header(f, PROTO_MAGIC, PROTO_VERSION + 1, MSG_ERROR, 2 + 4 + 2);
 	proto_wr16(f + 12, PERR_VERSION);
 	proto_wr32(f + 14, 2);
 	f[18] = 'h', f[19] = 'i';
-	CHECK(raw_frame(f, 20, &m, &code, &why) == 1 && m.type == MSG_ERROR && m.frame_version == 2 &&
+	CHECK(raw_frame(f, 20, &m, &code, &why) == 1 && m.type == MSG_ERROR && m.frame_version == PROTO_VERSION + 1 &&
 	      strcmp(m.u.error.text, "hi") == 0);
 	/* wrong payload sizes */
-	put_header(f, PROTO_MAGIC, 1, MSG_BYE, 1);
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_BYE, 1);
 	CHECK(raw_frame(f, 13, &m, &code, &why) == -1 && strstr(why, "longer"));
-	put_header(f, PROTO_MAGIC, 1, MSG_CANCEL, 3);
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_CANCEL, 3);
 	CHECK(raw_frame(f, 15, &m, &code, &why) == -1 && strstr(why, "shorter"));
 	/* a tile result whose pixel bytes do not match its rectangle */
-	put_header(f, PROTO_MAGIC, 1, MSG_TILE_RESULT, 24 + 11);
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_TILE_RESULT, 24 + 11);
 	memset(f + 12, 0, 24 + 11);
 	proto_wr32(f + 12 + 12, 2), proto_wr32(f + 12 + 16, 2); /* 2x2: 12 bytes */
 	CHECK(raw_frame(f, 12 + 35, &m, &code, &why) == -1 && strstr(why, "pixel bytes"));
 	/* a tile larger than the limit */
-	put_header(f, PROTO_MAGIC, 1, MSG_TILE, 20);
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_TILE, 20);
 	memset(f + 12, 0, 20);
 	proto_wr32(f + 12 + 12, 2048), proto_wr32(f + 12 + 16, 2048);
 	CHECK(raw_frame(f, 32, &m, &code, &why) == -1 && strstr(why, "tile size"));
 	/* an error text longer than the limit */
-	put_header(f, PROTO_MAGIC, 1, MSG_ERROR, 6);
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_ERROR, 6);
 	proto_wr16(f + 12, 1);
 	proto_wr32(f + 14, LIM_ERROR_TEXT + 1);
 	CHECK(raw_frame(f, 18, &m, &code, &why) == -1);
 	/* a scene offer of 0 bytes or too big an image */
-	put_header(f, PROTO_MAGIC, 1, MSG_SCENE_OFFER, 48);
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_SCENE_OFFER, 48);
 	memset(f + 12, 0, 48);
 	proto_wr32(f + 12 + 40, 10), proto_wr32(f + 12 + 44, 10);
 	CHECK(raw_frame(f, 60, &m, &code, &why) == -1 && strstr(why, "scene size"));
 	/* a declared length is never allocated up front: a 4 MiB frame that
 	 * never arrives costs only what did arrive */
 	pair();
-	put_header(f, PROTO_MAGIC, 1, MSG_SCENE_DATA, LIM_FRAME_PAYLOAD);
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_SCENE_DATA, LIM_FRAME_PAYLOAD);
 	CHECK(write(sv[0], f, 12) == 12);
 	const char *w;
 	CHECK(proto_conn_read(B, &w) == 1);
@@ -226,7 +226,7 @@ static void test_conn_limit(void)
 	const char *why = "", *w;
 	pair();
 	proto_conn_set_limit(B, LIM_HANDSHAKE_PAYLOAD);
-	put_header(f, PROTO_MAGIC, 1, MSG_HELLO, LIM_HANDSHAKE_PAYLOAD + 1);
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_HELLO, LIM_HANDSHAKE_PAYLOAD + 1);
 	CHECK(write(sv[0], f, 12) == 12);
 	CHECK(proto_conn_read(B, &w) == 1);
 	CHECK(proto_conn_next(B, &m, &code, &why) == -1 && code == PERR_LIMIT);
@@ -236,8 +236,8 @@ static void test_conn_limit(void)
 	proto_conn_set_limit(B, LIM_HANDSHAKE_PAYLOAD);
 	uint8_t big[4096] = { 0 };
 	size_t one = PROTO_HEADER_BYTES + LIM_HANDSHAKE_PAYLOAD;
-	put_header(big, PROTO_MAGIC, 1, MSG_SCENE_DATA, LIM_HANDSHAKE_PAYLOAD);
-	put_header(big + one, PROTO_MAGIC, 1, MSG_BYE, 0); /* and a second frame behind it */
+	put_header(big, PROTO_MAGIC, PROTO_VERSION, MSG_SCENE_DATA, LIM_HANDSHAKE_PAYLOAD);
+	put_header(big + one, PROTO_MAGIC, PROTO_VERSION, MSG_BYE, 0); /* and a second frame behind it */
 	CHECK(write(sv[0], big, one + 12) == (ssize_t)(one + 12));
 	while (proto_conn_read(B, &w) > 0)
 		;
