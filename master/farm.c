@@ -1103,7 +1103,9 @@ static void tick(struct farm *f)
 				continue;
 			}
 		}
-		if (w->state >= W_HELLO && now - w->last_hb >= f->hb_interval) {
+		/* from our offer on: a heartbeat before the handshake is done is a
+		 * protocol error (protocol 2) */
+		if (w->state >= W_OFFER && now - w->last_hb >= f->hb_interval) {
 			proto_send_heartbeat(w->pc, 0, 0);
 			w->last_hb = now;
 		}
