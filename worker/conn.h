@@ -92,8 +92,10 @@ struct wk_server {
 	struct wk_opts *opt;            /* (the fault hooks count tiles in it) */
 	struct ev_loop *loop;
 	int lfd;
-	struct ev_timer t_accept;       /* resumes accepting after running out of descriptors */
+	struct ev_timer t_accept;       /* resumes accepting (out of descriptors, or evictions paced) */
 	bool accept_starved;            /* out of descriptors: logged once until an accept works */
+	double evict_credit;            /* evictions allowed now (WK_EVICT_RATE, WK_EVICT_BURST) */
+	double evict_credit_at;         /* when it was last refilled */
 	struct wk_conn *conns;          /* every connection */
 	size_t n_conns, n_authed, n_unauth;
 	struct wk_conn *unauth_head, *unauth_tail;

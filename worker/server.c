@@ -7,10 +7,13 @@
  * newer one past that is told ERROR(limit). Before that it counts against
  * WK_MAX_UNAUTH (and WK_MAX_UNAUTH_PER_ADDR from its address), and a full
  * budget never turns a newcomer away: it evicts the oldest unauthenticated
- * connection instead (one that has not sent a valid HELLO first). So peers
- * that connect and say nothing, however many and however often they
- * reconnect, hold at most WK_MAX_UNAUTH descriptors and cannot keep a real
- * master, which authenticates within a round trip of its accept, out.
+ * connection instead (one that has not sent a valid HELLO first, each read
+ * once more before it goes). Evictions are paced (WK_EVICT_RATE): a flood
+ * that reconnects as fast as it is evicted waits in the kernel's accept
+ * queue, and a master queued behind it has sent its HELLO by the time it is
+ * accepted. So peers that connect and say nothing, however many and however
+ * often they reconnect, hold at most WK_MAX_UNAUTH descriptors, cost little
+ * CPU, and cannot keep a real master out.
  */
 #include <errno.h>
 #include <poll.h>
@@ -118,12 +121,13 @@ static size_t count_unauth(struct wk_server *srv, const char *peer, size_t len)
  * is read once more first: a master's HELLO that arrived since the last
  * poll saves it (a flood's newcomers arrive faster than a poll round).
  */
-static void make_room(struct wk_server *srv, const char *peer, size_t len, size_t max, const char *why)
+static int make_room(struct wk_server *srv, const char *peer, size_t len, size_t max, const char *why)
 {
+	int evicted = 0;
 	while (count_unauth(srv, peer, len) >= max) {
 		struct wk_conn *v = victim(srv, peer, len);
 		if (!v)
-			return;
+			break;
 		if (!v->spoke && !v->last_chance) {
 			v->last_chance = true;
 			wk_conn_input(v); /* may close it, fail it or move it on: counted again */
@@ -131,22 +135,25 @@ static void make_room(struct wk_server *srv, const char *peer, size_t len, size_
 		}
 		wk_conn_fail(v, PERR_LIMIT, "%s", why);
 		wk_conn_settle(v);
+		evicted++;
 	}
+	return evicted;
 }
 
-/* Serves a new connection, making room in the unauthenticated budget. */
-static void admit(struct wk_server *srv, int fd, const char *peer)
+/* Serves a new connection, making room in the unauthenticated budget;
+ * returns the number of connections evicted for it. */
+static int admit(struct wk_server *srv, int fd, const char *peer)
 {
 	const char *colon = strrchr(peer, ':');
 	size_t len = colon ? (size_t)(colon - peer) : strlen(peer);
-	make_room(srv, peer, len, WK_MAX_UNAUTH_PER_ADDR,
-		  "evicted: too many unauthenticated connections from one address");
-	make_room(srv, NULL, 0, WK_MAX_UNAUTH, "evicted: too many unauthenticated connections");
+	int evicted = make_room(srv, peer, len, WK_MAX_UNAUTH_PER_ADDR,
+				"evicted: too many unauthenticated connections from one address");
+	evicted += make_room(srv, NULL, 0, WK_MAX_UNAUTH, "evicted: too many unauthenticated connections");
 	const char *why = "";
 	struct wk_conn *c = wk_conn_new(srv, fd, peer, &why);
 	if (!c) {
 		wk_log_limited(&srv->quiet_log, "%s: refused: %s", peer, why);
-		return;
+		return evicted;
 	}
 	c->next = srv->conns;
 	if (srv->conns)
@@ -162,6 +169,25 @@ static void admit(struct wk_server *srv, int fd, const char *peer)
 	 * here already, and the connection is out of the eviction order's
 	 * front before the next newcomer arrives */
 	wk_conn_input(c);
+	return evicted;
+}
+
+/* Takes n evictions from the credit (refilled at WK_EVICT_RATE up to
+ * WK_EVICT_BURST); when it runs out, the listening socket rests until one
+ * more is due. true when accepting may go on. */
+static bool pace_evictions(struct wk_server *srv, int n)
+{
+	double now = net_now();
+	srv->evict_credit += (now - srv->evict_credit_at) * WK_EVICT_RATE;
+	if (srv->evict_credit > WK_EVICT_BURST)
+		srv->evict_credit = WK_EVICT_BURST;
+	srv->evict_credit_at = now;
+	srv->evict_credit -= n;
+	if (srv->evict_credit >= 1)
+		return true;
+	ev_io_events(srv->loop, srv->lfd, 0);
+	ev_timer_arm(srv->loop, &srv->t_accept, now + (1 - srv->evict_credit) / WK_EVICT_RATE);
+	return false;
 }
 
 static void on_accept(struct ev_loop *l, int fd, short revents, void *arg)
@@ -173,7 +199,9 @@ static void on_accept(struct ev_loop *l, int fd, short revents, void *arg)
 		int cfd = net_accept(fd, peer, sizeof peer);
 		if (cfd >= 0) {
 			srv->accept_starved = false;
-			admit(srv, cfd, peer);
+			int evicted = admit(srv, cfd, peer);
+			if (evicted && !pace_evictions(srv, evicted))
+				return;
 			continue;
 		}
 		if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
@@ -269,6 +297,8 @@ int wk_server_init(struct wk_server *srv, struct wk_opts *opt, int lfd)
 	}
 	ev_on_wake(srv->loop, on_wake, srv);
 	ev_timer_init(&srv->t_accept, on_accept_resume, srv);
+	srv->evict_credit = WK_EVICT_BURST;
+	srv->evict_credit_at = net_now();
 	srv->threads = wk_tracers_start(&srv->tracers, opt->threads, srv->loop, &srv->cache, &opt->faults);
 	if (srv->threads == 0) {
 		fprintf(stderr, "portray-worker: cannot start tracer threads\n");

@@ -35,6 +35,14 @@
 /* connections accepted per readiness of the listening socket: the others
  * (a master's HELLO among them) are read between two batches */
 #define WK_ACCEPT_BATCH 8
+/* evictions per second at most (and in a burst): past that, accepting waits.
+ * A flood that reconnects as fast as it is evicted then waits in the
+ * kernel's accept queue, and so does a master behind it, whose HELLO is
+ * there when it is accepted (it sends it on connecting): read at once, it
+ * is no longer a silent peer. Without the pace, a flood could turn the
+ * unauthenticated budget over faster than a master's first frame arrives. */
+#define WK_EVICT_RATE 500.0
+#define WK_EVICT_BURST 64.0
 /* default scene cache budget, MiB of encoded scene bytes */
 #define WK_CACHE_MB_DEFAULT 1024
 
