@@ -52,8 +52,9 @@ struct test_worker {
 
 /*
  * Starts bin/portray-worker on 127.0.0.1:0 with `-j threads` and the extra
- * arguments (NULL-terminated), stderr to /dev/null, at most max_fds open
- * descriptors when max_fds > 0; waits for its port file and points `port`
+ * arguments (NULL-terminated), stderr to /dev/null (or $PEER_WORKER_LOG),
+ * at most max_fds open descriptors when max_fds > 0; waits for its port
+ * file and points `port`
  * (which dial() and hello() use) at it. Returns 0, or -1 when the worker
  * reported no port. worker_stop() ends it and restores `port`.
  */
@@ -74,9 +75,11 @@ static int worker_start(struct test_worker *w, int max_fds, const char *threads,
 			struct rlimit rl = { (rlim_t)max_fds, (rlim_t)max_fds };
 			setrlimit(RLIMIT_NOFILE, &rl);
 		}
-		int null = open("/dev/null", O_WRONLY);
-		dup2(null, 2);
-		close(null);
+		/* PEER_WORKER_LOG=F keeps the workers' logs (a sanitizer's reports) */
+		const char *keep = getenv("PEER_WORKER_LOG");
+		int out = open(keep ? keep : "/dev/null", O_WRONLY | O_CREAT | O_APPEND, 0644);
+		dup2(out, 2);
+		close(out);
 		execv("bin/portray-worker", (char *const *)argv);
 		_exit(127);
 	}
