@@ -39,8 +39,6 @@
 
 static void worker_timer(struct ev_loop *l, void *arg);
 
-/* TODO(merge): 1 once the worker accepts tiles during its build (protocol 2) */
-#define FARM_PIPELINE_TILES 0
 
 int worker_init(struct farm *f, struct worker *w, const struct worker_addr *a, uint16_t index)
 {
@@ -301,7 +299,7 @@ static void size_window(struct worker *w)
 void worker_dispatch(struct worker *w)
 {
 	struct farm *f = w->f;
-	if ((w->state != W_READY && !(w->state == W_BUILDING && FARM_PIPELINE_TILES)) || !w->pc)
+	if ((w->state != W_READY && w->state != W_BUILDING) || !w->pc)
 		return;
 	double now = net_now();
 	bool sent = false;

@@ -85,7 +85,11 @@ int net_listen(const char *host, const char *port, char *err, size_t errlen)
 		}
 		int one = 1;
 		setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
-		if (bind(fd, ai->ai_addr, ai->ai_addrlen) == 0 && listen(fd, 64) == 0 && set_flags(fd) == 0)
+		/* the longest accept queue the system allows: when it is full the
+		 * kernel drops SYNs, and a master behind a flood of connects would
+		 * wait a second or more per retransmission before a worker that
+		 * accepts (and evicts) fast ever saw it */
+		if (bind(fd, ai->ai_addr, ai->ai_addrlen) == 0 && listen(fd, SOMAXCONN) == 0 && set_flags(fd) == 0)
 			break;
 		saved = errno;
 		close(fd);
