@@ -43,7 +43,7 @@ wait_for "$T/v.log" "refused: protocol version mismatch: the master speaks versi
 start_worker bld -j 1 --test-fault build-id
 "$BIN/portray-master" "$SCENE" -o "$T/x.ppm" --no-local -w "127.0.0.1:$bld_PORT" 2>"$T/m5.log"
 [ $? -eq 69 ] || fail "build mismatch: wrong exit code"
-grep -q "core build mismatch: worker runs '.*-other', master runs" "$T/m5.log" || fail "build mismatch: master message unclear"
+grep -q "core build mismatch: the worker runs '.*-other', this master runs" "$T/m5.log" || fail "build mismatch: master message unclear"
 wait_for "$T/bld.log" "peer says: core build mismatch" "the worker to be told of the build mismatch"
 
 # all workers refused but local threads allowed: the render completes locally

@@ -115,7 +115,7 @@ static void test_short_reads(void)
 	CHECK(proto_conn_flush(A) == 0);
 	uint8_t all[256];
 	ssize_t n = recv(sv[1], all, sizeof all, 0);
-	CHECK(n == 12 + 24 + 48 + 12);
+	CHECK(n == 12 + 28 + 48 + 12);
 	/* feed it back through a fresh pair one byte at a time */
 	int p2[2];
 	CHECK(socketpair(AF_UNIX, SOCK_STREAM, 0, p2) == 0);
@@ -129,7 +129,7 @@ static void test_short_reads(void)
 		CHECK(proto_conn_read(r, &why) == 1);
 		int k = proto_conn_next(r, &m, &code, &why);
 		if (k == 1)
-			got++, early += i != 12 + 24 + 48 - 1;
+			got++, early += i != 12 + 28 + 48 - 1;
 		CHECK(k >= 0);
 	}
 	CHECK(got == 1 && early == 0);
@@ -186,10 +186,10 @@ static void test_bad_frames(void)
 	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_CANCEL, 3);
 	CHECK(raw_frame(f, 15, &m, &code, &why) == -1 && strstr(why, "shorter"));
 	/* a tile result whose pixel bytes do not match its rectangle */
-	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_TILE_RESULT, 24 + 11);
-	memset(f + 12, 0, 24 + 11);
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_TILE_RESULT, 28 + 11);
+	memset(f + 12, 0, 28 + 11);
 	proto_wr32(f + 12 + 12, 2), proto_wr32(f + 12 + 16, 2); /* 2x2: 12 bytes */
-	CHECK(raw_frame(f, 12 + 35, &m, &code, &why) == -1 && strstr(why, "pixel bytes"));
+	CHECK(raw_frame(f, 12 + 39, &m, &code, &why) == -1 && strstr(why, "pixel bytes"));
 	/* a tile larger than the limit */
 	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_TILE, 20);
 	memset(f + 12, 0, 20);
