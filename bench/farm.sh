@@ -2,7 +2,7 @@
 # bench/farm.sh - the farm's figures (make bench):
 #  1. parallel efficiency: master + 2 workers (-j 1 each, --no-local) against
 #     a local -j 2 render of balls_s4 at 1280x960 (target >= 90%);
-#  2. master overhead: 1x1 tiles through 32 simulated workers (32 connections
+#  2. master overhead: 1x1 tiles through 64 simulated workers (64 connections
 #     to a worker that answers every tile at once with black pixels): tiles/s;
 #  3. bytes on the wire per job (scene, tiles; a cache hit moves no scene).
 # Processes on 127.0.0.1 with OS-chosen ports, all killed on exit.
@@ -83,19 +83,20 @@ fi
 grep "farm: bytes sent" "$T/farm.log" | sed 's/^portray-master: /  /'
 awk '/received/ { for (i = 1; i <= NF; i++) if ($i == "received") r += $(i + 1) } END { printf "  bytes received (tile results) %d\n", r }' "$T/farm.log"
 
-# master overhead: 32 connections to a black-tile worker, 1x1 tiles (no audits:
-# black tiles would fail them)
+# master overhead: NSIM connections to a black-tile worker, 1x1 tiles (no
+# audits: black tiles would fail them)
+NSIM=${NSIM:-64}
 start_worker black -j 1 --test-fault black
 PB=$black_PORT
 L=""
-for i in $(seq 32); do L="$L${L:+,}127.0.0.1:$PB"; done
+for i in $(seq "$NSIM"); do L="$L${L:+,}127.0.0.1:$PB"; done
 OS=${OVERHEAD_SIZE:-320x240}
 t0=$(now)
 "$BIN/portray-master" "$SCENE" --size "$OS" --tile 1 -o "$T/black.ppm" -w "$L" --no-local --audit 0 2>"$T/m_black.log" || exit 1
 t1=$(now)
-awk -v a="$t0" -v b="$t1" -v s="$OS" 'BEGIN {
+awk -v a="$t0" -v b="$t1" -v s="$OS" -v k="$NSIM" 'BEGIN {
 	split(s, d, "x"); n = d[1] * d[2];
-	printf "master overhead: %d 1x1 tiles through 32 simulated workers in %.2f s: %.0f tiles/s (including 32 handshakes and scene offers)\n", n, b - a, n / (b - a) }'
+	printf "master overhead: %d 1x1 tiles through %d simulated workers in %.2f s: %.0f tiles/s (including %d handshakes and scene offers)\n", n, k, b - a, n / (b - a), k }'
 grep "farm: bytes sent" "$T/m_black.log" | sed 's/^portray-master: /  /'
 
 # bytes per job, scene cached: a second job

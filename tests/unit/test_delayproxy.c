@@ -288,9 +288,11 @@ static void bounded(int lfd)
 	}
 	long kb = rss_kib(px.pid);
 	printf("a server that does not read: the client stalled after %.1f MB; proxy RSS %ld KiB\n", sent / 1e6, kb);
-	/* socket buffers on both sides of the proxy hold some MB; the queue 1 MiB */
+	/* socket buffers on both sides of the proxy hold some MB, the queue 1 MiB;
+	 * without the bound the proxy would take all 256 MB (the RSS bound leaves
+	 * room for a sanitizer build's own memory) */
 	CHECK(sent < (64ull << 20));
-	CHECK(kb < 0 || kb < 16 * 1024);
+	CHECK(kb < 0 || kb < 48 * 1024);
 	close(c);
 	close(s);
 	proxy_stop(&px);

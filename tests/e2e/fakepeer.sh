@@ -1,0 +1,105 @@
+#!/bin/sh
+# The fake peers (tests/tools/fakepeer.c) against today's master and worker:
+#  - every `fakepeer worker` mode starts, gets as far as the stage it stalls
+#    at (its log says what it received: the master's HELLO, AUTH, the offer
+#    (sent only after the master checked the fake's HELLO and proof), the
+#    whole scene with the right hash, tiles), and a master with local threads
+#    finishes the render anyway, identical to the local one;
+#  - with --no-local, the stalls the master already has a deadline for:
+#    `silent` (no frame: heartbeat timeout) and `stall-tile` (the hung-tile
+#    deadline) end with exit 69. The other modes make today's master wait
+#    for ever with --no-local: farm_deadlines.sh holds those expectations;
+#  - `fakepeer hold` keeps idle connections open on a real worker, which
+#    drops them at its handshake deadline; they are opened again, and a real
+#    master still renders through that worker meanwhile; a worker filled up
+#    to WK_MAX_CONNS does not leave a master hanging;
+#  - both kinds exit 0 on SIGTERM.
+. "$(dirname "$0")/farm_lib.inc"
+printf 'correct horse battery staple\n' >"$T/secret"
+chmod 600 "$T/secret"
+local_render "$SLOW" "$T/local.ppm" --size 192x144
+
+# MODE  PATTERN (one word: '.' for spaces) [fakepeer options]; the master
+# gets --secret-file when the fake has a secret
+while read -r mode pattern opts; do
+	[ -n "$mode" ] || continue
+	fk=$(echo "$mode" | tr -d -)
+	# shellcheck disable=SC2086
+	start_fake "$fk" "$mode" $opts
+	msec=""
+	case "$opts" in *secret*) msec="--secret-file $T/secret" ;; esac
+	eval "port=\$${fk}_PORT"
+	# shellcheck disable=SC2086
+	timeout 60 "$BIN/portray-master" "$SLOW" --size 192x144 --tile 16 -j 1 --heartbeat-timeout 1 $msec \
+		-o "$T/$fk.ppm" -w "127.0.0.1:$port" 2>"$T/m_$fk.log" || fail "$mode: the render failed (exit $?)"
+	cmp "$T/local.ppm" "$T/$fk.ppm" || fail "$mode: the image differs from the local render"
+	wait_for "$T/$fk.log" "$pattern" "$mode to log '$pattern'" 10
+	grep -q "authentication failed" "$T/m_$fk.log" "$T/$fk.log" && fail "$mode: the fake's AUTH is wrong"
+	echo "ok   $mode: $(grep -m 1 "$pattern" "$T/$fk.log" | sed 's/^fakepeer worker [0-9.]* //')"
+done <<MODES
+silent          received.HELLO
+heartbeat-only  received.HELLO
+stall-hello     received.SCENE_OFFER
+stall-auth      received.AUTH                 --secret
+stall-offer     received.SCENE_OFFER          --secret-file $T/secret
+stall-data      sent.SCENE_NEED;.not.reading
+stall-build     scene.complete:.*hash.ok
+stall-tile      received.TILE
+MODES
+
+# --no-local: the deadlines today's master has
+timeout 60 "$BIN/portray-master" "$SCENE" -o "$T/x.ppm" --no-local --heartbeat-timeout 0.5 \
+	-w "127.0.0.1:$silent_PORT" 2>"$T/m_silent2.log"
+rc=$?
+[ $rc -eq 69 ] || fail "silent, --no-local: exit $rc, expected 69"
+grep -q "worker 127.0.0.1:$silent_PORT dropped" "$T/m_silent2.log" || fail "silent: not reported dropped"
+timeout 60 "$BIN/portray-master" "$SCENE" -o "$T/x.ppm" --no-local --heartbeat-timeout 0.5 \
+	-w "127.0.0.1:$stalltile_PORT" 2>"$T/m_tile2.log"
+rc=$?
+[ $rc -eq 69 ] || fail "stall-tile, --no-local: exit $rc, expected 69"
+grep -q "worker 127.0.0.1:$stalltile_PORT dropped" "$T/m_tile2.log" || fail "stall-tile: not reported dropped"
+echo "ok   --no-local: silent and stall-tile end with exit 69"
+
+# a fake worker ends cleanly on SIGTERM
+kill -TERM "$stalltile_PID"
+wait "$stalltile_PID" || fail "fakepeer worker: exit $? on SIGTERM"
+
+# hold: 8 idle connections on a worker with a 300 ms handshake deadline
+start_worker w -j 1 --test-handshake-ms 300
+"$TOOLS/fakepeer" hold --to "127.0.0.1:$w_PORT" --count 8 --port-file-ready "$T/hold.ready" 2>"$T/hold.log" &
+HOLD=$!
+PIDS="$PIDS $HOLD"
+wait_for "$T/hold.ready" "^8$" "hold to open its 8 connections" 10
+wait_count "$T/w.log" "refused: .*(timeout error)" 8 "the worker to drop the 8 idle connections"
+wait_count "$T/hold.log" "worker says: .*(timeout); again in" 8 "hold to open them again"
+"$BIN/portray-master" "$SLOW" --size 192x144 --tile 16 --no-local -o "$T/held.ppm" -w "127.0.0.1:$w_PORT" \
+	2>"$T/m_held.log" || fail "render through a worker with idle connections failed (exit $?)"
+cmp "$T/local.ppm" "$T/held.ppm" || fail "image differs through a worker with idle connections"
+kill -TERM $HOLD
+wait $HOLD || fail "fakepeer hold: exit $? on SIGTERM"
+echo "ok   hold: $(grep -c 'again in' "$T/hold.log") reconnections; a master rendered meanwhile"
+
+# a worker full of idle connections (WK_MAX_CONNS of them, default handshake
+# deadline): a --no-local master must not hang. Today it is told the worker
+# is full and gives up after its retries (exit 69); a worker that learns to
+# make room for real masters would let it render: both are accepted here
+max=$(sed -n 's/^#define WK_MAX_CONNS \([0-9]*\).*/\1/p' worker/main.c)
+[ -n "$max" ] || fail "WK_MAX_CONNS not found in worker/main.c"
+start_worker full -j 1
+"$TOOLS/fakepeer" hold --to "127.0.0.1:$full_PORT" --count "$max" --port-file-ready "$T/full.ready" 2>"$T/full_hold.log" &
+HOLD=$!
+PIDS="$PIDS $HOLD"
+wait_for "$T/full.ready" "^$max$" "hold to fill the worker with $max connections" 30
+timeout 60 "$BIN/portray-master" "$SCENE" -o "$T/full.ppm" --no-local -w "127.0.0.1:$full_PORT" 2>"$T/m_full.log"
+rc=$?
+if [ $rc -eq 69 ]; then
+	grep -q "worker says: .*(limit error)" "$T/m_full.log" || fail "full worker: exit 69 without the reason"
+	echo "ok   a worker full of $max idle connections: the master is told so and ends (exit 69)"
+else
+	[ $rc -eq 0 ] || fail "full worker: exit $rc"
+	local_render "$SCENE" "$T/local_scene.ppm"
+	cmp "$T/local_scene.ppm" "$T/full.ppm" || fail "full worker: image differs"
+	echo "ok   a worker full of $max idle connections still served a master"
+fi
+kill -TERM $HOLD
+wait $HOLD || fail "fakepeer hold: exit $? on SIGTERM"
