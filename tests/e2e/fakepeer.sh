@@ -11,8 +11,7 @@
 #    for ever with --no-local: farm_deadlines.sh holds those expectations;
 #  - `fakepeer hold` keeps idle connections open on a real worker, which
 #    drops them at its handshake deadline; they are opened again, and a real
-#    master still renders through that worker meanwhile; a worker filled up
-#    to WK_MAX_CONNS does not leave a master hanging;
+#    master still renders through that worker meanwhile;
 #  - both kinds exit 0 on SIGTERM.
 . "$(dirname "$0")/farm_lib.inc"
 printf 'correct horse battery staple\n' >"$T/secret"
@@ -79,27 +78,5 @@ kill -TERM $HOLD
 wait $HOLD || fail "fakepeer hold: exit $? on SIGTERM"
 echo "ok   hold: $(grep -c 'again in' "$T/hold.log") reconnections; a master rendered meanwhile"
 
-# a worker full of idle connections (WK_MAX_CONNS of them, default handshake
-# deadline): a --no-local master must not hang. Today it is told the worker
-# is full and gives up after its retries (exit 69); a worker that learns to
-# make room for real masters would let it render: both are accepted here
-max=$(sed -n 's/^#define WK_MAX_CONNS \([0-9]*\).*/\1/p' worker/main.c)
-[ -n "$max" ] || fail "WK_MAX_CONNS not found in worker/main.c"
-start_worker full -j 1
-"$TOOLS/fakepeer" hold --to "127.0.0.1:$full_PORT" --count "$max" --port-file-ready "$T/full.ready" 2>"$T/full_hold.log" &
-HOLD=$!
-PIDS="$PIDS $HOLD"
-wait_for "$T/full.ready" "^$max$" "hold to fill the worker with $max connections" 30
-timeout 60 "$BIN/portray-master" "$SCENE" -o "$T/full.ppm" --no-local -w "127.0.0.1:$full_PORT" 2>"$T/m_full.log"
-rc=$?
-if [ $rc -eq 69 ]; then
-	grep -q "worker says: .*(limit error)" "$T/m_full.log" || fail "full worker: exit 69 without the reason"
-	echo "ok   a worker full of $max idle connections: the master is told so and ends (exit 69)"
-else
-	[ $rc -eq 0 ] || fail "full worker: exit $rc"
-	local_render "$SCENE" "$T/local_scene.ppm"
-	cmp "$T/local_scene.ppm" "$T/full.ppm" || fail "full worker: image differs"
-	echo "ok   a worker full of $max idle connections still served a master"
-fi
-kill -TERM $HOLD
-wait $HOLD || fail "fakepeer hold: exit $? on SIGTERM"
+# a flood of idle connections against a worker that makes room for real
+# masters: tests/e2e/farm_flood.sh

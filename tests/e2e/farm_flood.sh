@@ -8,14 +8,12 @@
 printf 'flood test secret\n' >"$T/secret"
 chmod 600 "$T/secret"
 start_worker w -j 1 --secret-file "$T/secret"
-"$TOOLS/fakepeer" hold --to "127.0.0.1:$w_PORT" --count 300 --port-file-ready "$T/ready" 2>"$T/hold.log" &
+"$TOOLS/fakepeer" hold --to "127.0.0.1:$w_PORT" --count 300 2>"$T/hold.log" &
 PIDS="$PIDS $!"
-i=0
-while [ ! -f "$T/ready" ]; do
-	i=$((i + 1))
-	[ $i -gt 600 ] && fail "the 300 connections were not all open within 30 s"
-	sleep 0.05
-done
+# the flood is on once the worker has had to evict (its budget for
+# unauthenticated connections is far below 300) and the holder reconnects
+wait_for "$T/w.log" "evicted: too many unauthenticated" "the worker to evict idle connections" 30
+wait_for "$T/hold.log" "again in" "the holder to reconnect evicted connections" 30
 local_render "$SCENE" "$T/local.ppm" --size 64x48
 timeout 60 "$BIN/portray-master" "$SCENE" --size 64x48 -o "$T/farm.ppm" --no-local --secret-file "$T/secret" \
 	-w "127.0.0.1:$w_PORT" 2>"$T/m.log" || fail "the master could not render past 300 idle connections (exit $?)"
@@ -24,4 +22,6 @@ cmp "$T/local.ppm" "$T/farm.ppm" || fail "image differs"
 timeout 60 "$BIN/portray-master" "$SCENE" --size 64x48 -o "$T/farm2.ppm" --no-local --secret-file "$T/secret" \
 	-w "127.0.0.1:$w_PORT" 2>"$T/m2.log" || fail "the second render failed (exit $?)"
 cmp "$T/local.ppm" "$T/farm2.ppm" || fail "second image differs"
+kill -0 "$w_PID" || fail "the worker died under the flood"
+echo "$(grep -c 'again in' "$T/hold.log") connections reopened by the holder meanwhile"
 echo ok

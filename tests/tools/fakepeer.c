@@ -11,12 +11,14 @@
  * at accept with PROTO_VERSION, ROLE_WORKER, proto_build_id(), 1 thread and
  * a fresh nonce; the master's AUTH checked and answered with proto_auth_mac;
  * SCENE_NEED for every offer; the scene received and its hash checked;
- * SCENE_READY) up to the stage where MODE makes it stop. From accept on it
- * sends HEARTBEATs every --heartbeat-ms (100) ms, except `silent`. Modes
+ * SCENE_READY) up to the stage where MODE makes it stop. Once its handshake
+ * is done (protocol 2 allows no earlier ones) it sends HEARTBEATs every
+ * --heartbeat-ms (100) ms, except `silent`; heartbeat-only sends nothing
+ * else, from accept on. Modes
  * (the table `modes` below):
  *   silent          accepts, never sends anything
  *   heartbeat-only  HEARTBEATs only, never a HELLO
- *   stall-hello     a valid HELLO, then HEARTBEATs only
+ *   stall-hello     a valid HELLO, then nothing
  *   stall-auth      a valid HELLO; never answers the master's AUTH (needs
  *                   --secret or --secret-file, so that the master sends one)
  *   stall-offer     the handshake (AUTH too with --secret-file), then never
@@ -397,11 +399,14 @@ static int worker_loop(int lfd)
 		double now = net_now(), next = INFINITY;
 		for (size_t i = 0; i < n_conns;) {
 			struct fp_conn *c = conns[i];
-			if (wopt.mode->heartbeat && now >= c->next_hb) {
+			/* heartbeats only where protocol 2 allows them (from the
+			 * offer on), but for heartbeat-only, whose point they are */
+			bool hb = wopt.mode->heartbeat && (!wopt.mode->hello || c->stage >= FS_OFFER);
+			if (hb && now >= c->next_hb) {
 				proto_send_heartbeat(c->pc, 0, c->n_tiles);
 				c->next_hb = now + wopt.hb_interval;
 			}
-			if (wopt.mode->heartbeat && c->next_hb < next)
+			if (hb && c->next_hb < next)
 				next = c->next_hb;
 			if (proto_conn_flush(c->pc) < 0) {
 				conn_free(i, "the master is gone: a write failed");
