@@ -69,6 +69,13 @@ void accel_get_stats(const struct accel *a, struct accel_stats *st);
  * returns false when nothing is bounded. */
 bool accel_bounds(const struct accel *a, vec3 *lo, vec3 *hi);
 
+/* The queries below poll the calling thread's cancel flag (cancel.h) where
+ * one ray's work can grow without bound (nested instances, long lists);
+ * once a poll has seen it set they answer "no hit" or "not occluded"
+ * without looking further, and the caller must discard what it computes
+ * from them (cancel_seen). Without a flag, or until it is seen, they are
+ * exact. */
+
 /* Closest hit in (r->tmin, r->tmax); fills *h and returns true if any. Thread-safe.
  * h->u, h->v and h->mp may be left 0 until accel_hit_surface(a, h): only
  * shaders read them, and the sphere mapping (atan2, asin) costs as much as

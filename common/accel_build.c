@@ -467,6 +467,11 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 		goto oom;
 	if (bvh_build_ex(&g->bvh, boxes, n_bounded, perm, inst_only ? ACCEL_INST_LEAF : ACCEL_MAX_LEAF, inst_only) < 0)
 		goto oom;
+	/* leaves too big to test without polling (only the builder's depth
+	 * limit makes them; a root that is a leaf has at most max_leaf) */
+	for (uint32_t k = 0; k < g->bvh.n_nodes4; k++)
+		for (int c = 0; c < 4; c++)
+			g->big_leaf |= g->bvh.nodes[k].n[c] > ACCEL_LEAF_CHUNK;
 	g->bounds = geom_box_empty();
 	for (uint32_t k = 0; k < n_bounded; k++)
 		g->bounds = geom_box_union(g->bounds, boxes[k]);

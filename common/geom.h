@@ -204,6 +204,8 @@ static inline bool geom_tri_hit(const struct geom_wray *w, vec3 a, vec3 b, vec3 
  * Surfaces with no inside and open cylinders follow docs/language.md.
  * Thread-safe; allocates only when a ray has more than
  * CSG_STACK_CROSSINGS crossings (and then treats out-of-memory as a miss).
+ * Once the calling thread's cancel flag is seen set (cancel.h) the result
+ * is wrong (crossings left out), to be discarded.
  */
 bool csg_hit(const struct scene *s, struct geom_obj *const *gobj, uint32_t obj, vec3 o, vec3 d,
 	     double tmin, double tmax, struct hit *h);
