@@ -61,7 +61,14 @@ struct accel_stats {
 	size_t instance_bytes;   /* size of one instance reference record */
 };
 
-/* Builds the acceleration for the scene's roots. Returns 0 or an error level. */
+/* What accel_build returns when it gave up (CANCEL_RETURN of cancel.h). */
+#define ACCEL_CANCELLED (-2)
+/*
+ * Builds the acceleration for the scene's roots. Returns 0 or an error
+ * level; or ACCEL_CANCELLED, with err->msg "cancelled", everything freed and
+ * *out NULL, when the calling thread's cancel flag (cancel.h) was seen set:
+ * the build polls it in its loops, every few milliseconds of work at most.
+ */
 int accel_build(const struct scene *s, struct accel **out, struct scene_error *err);
 void accel_free(struct accel *a);
 void accel_get_stats(const struct accel *a, struct accel_stats *st);

@@ -21,9 +21,9 @@
  * at any depth.
  *
  * An operand that is a defined object is evaluated member by member, so
- * nested defines make the work exponential in their depth (64): eval polls
- * the calling thread's cancel flag (cancel.h) at every node, and gives up
- * (no crossings) once it is seen set.
+ * nested defines make the work exponential in their depth (64): eval and
+ * csg_bounds poll the calling thread's cancel flag (cancel.h) at every
+ * node, and give up (no crossings; an empty box) once it is seen set.
  */
 #include "common/geom.h"
 
@@ -286,6 +286,8 @@ static struct geom_box box_isect(struct geom_box a, struct geom_box b)
 
 struct geom_box csg_bounds(const struct scene *s, struct geom_obj *const *gobj, uint32_t obj)
 {
+	if (cancel_poll())
+		return geom_box_empty();
 	const struct geom_obj *g = gobj[obj];
 	const struct scene_object *so = &s->objects[obj];
 	struct geom_box b;

@@ -210,7 +210,9 @@ static inline bool geom_tri_hit(const struct geom_wray *w, vec3 a, vec3 b, vec3 
 bool csg_hit(const struct scene *s, struct geom_obj *const *gobj, uint32_t obj, vec3 o, vec3 d,
 	     double tmin, double tmax, struct hit *h);
 
-/* Bounds of object obj in its parent space (CSG and instances recursively). */
+/* Bounds of object obj in its parent space (CSG and instances recursively);
+ * wrong (parts left out) once the calling thread's cancel flag is seen set
+ * (cancel.h), which the caller checks with cancel_seen. */
 struct geom_box csg_bounds(const struct scene *s, struct geom_obj *const *gobj, uint32_t obj);
 
 #endif

@@ -37,13 +37,26 @@ struct renderer {
 
 int renderer_new(const struct scene *s, struct renderer **out, struct scene_error *err)
 {
+	return renderer_new_cancellable(s, out, err, NULL);
+}
+
+_Static_assert(RENDERER_CANCELLED == ACCEL_CANCELLED, "the build's give-up value is the renderer's");
+
+/* The build runs in a cancel scope (cancel.h) whose polls accel_build and
+ * bvh_build_ex make in their loops; shade_ctx_new and the camera are quick. */
+int renderer_new_cancellable(const struct scene *s, struct renderer **out, struct scene_error *err,
+			     atomic_int *cancel)
+{
 	*out = NULL;
 	struct renderer *r = calloc(1, sizeof *r);
 	if (!r)
 		return scene_errorf(err, ERRLEVEL_FATAL, "out of memory");
 	r->s = s;
 	atomic_init(&r->rays, 0);
+	struct cancel_scope saved;
+	cancel_enter(cancel, &saved);
 	int rc = accel_build(s, &r->accel, err);
+	cancel_leave(&saved);
 	if (rc)
 		goto fail;
 	rc = shade_ctx_new(s, r->accel, &r->shade, err);

@@ -20,8 +20,26 @@ struct tile_rect {
 
 struct renderer;
 
-/* Builds the acceleration and shading state for a scene (which must outlive it). */
+/*
+ * Builds the acceleration and shading state for a scene (which must outlive
+ * it). Returns 0, or an error level (ERRLEVEL_*) with err filled in.
+ */
 int renderer_new(const struct scene *s, struct renderer **out, struct scene_error *err);
+
+/* What renderer_new_cancellable returns when it gave up: distinct from
+ * every error level (those are positive). */
+#define RENDERER_CANCELLED (-2)
+/*
+ * renderer_new, giving up when *cancel (may be NULL: never) becomes
+ * non-zero: the acceleration build polls it in its loops (a few
+ * milliseconds of work apart at most, whatever the scene), and then
+ * everything built so far is freed, *out is NULL, err holds "cancelled"
+ * (level ERRLEVEL_FATAL, for callers that print it) and the return value is
+ * RENDERER_CANCELLED. A build that finished is used even if the flag is set
+ * afterwards.
+ */
+int renderer_new_cancellable(const struct scene *s, struct renderer **out, struct scene_error *err,
+			     atomic_int *cancel);
 void renderer_free(struct renderer *r);
 
 /* Image size as the scene states it (or as overridden with renderer_set_size). */
