@@ -219,7 +219,7 @@ leaf:
 static uint32_t collapse(const struct bvh_node *nodes, uint32_t ni, struct bvh4 *out, uint32_t *next)
 {
 	uint32_t me = (*next)++;
-	if (cancel_poll_every(me))
+	if (cancel_seen() || cancel_poll_every(me)) /* seen: the other subtrees too */
 		return me;
 	uint32_t ch[4] = { nodes[ni].idx, nodes[ni].idx + 1, 0, 0 };
 	int nc = 2;

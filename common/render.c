@@ -200,8 +200,8 @@ out:
 /*
  * The tile runs in a cancel scope of its own (cancel.h): besides the polls
  * here, one per 2x2 block or pixel, the filters poll once per sample,
- * shading once per light sample and shading point, and the traversal when
- * it enters an instance and every ACCEL_POLL_POPS subtrees, so one
+ * shading once per light of a shading point, and the traversal when it
+ * enters an instance and every ACCEL_POLL_POPS subtrees, so one
  * pathological ray is abandoned too. Whatever they computed after a poll
  * saw the flag is wrong, so the tile is complete only when no poll did:
  * then every pixel is exactly what a run without a flag gives.
