@@ -45,6 +45,22 @@
  * leaves by, by ACCEL_OFFSET_REL * (1 + max |p_i|); then tmin = 0 is safe.
  * The offset is ~1e7 times the double rounding error of the tests, and far
  * below any feature size a scene can express in the SPD's units.
+ *
+ * CANCELLATION. One ray's work has no useful bound: defines nested 64 deep,
+ * each two overlapping instances of the one before, make 2^63 instances
+ * that a ray meeting them visits one by one. So a query polls the calling
+ * thread's cancel flag (cancel.h) wherever the work can grow: on entering
+ * an instance, every ACCEL_POLL_POPS subtrees a traversal pops, and every
+ * CANCEL_STRIDE unbounded references; a leaf of more than ACCEL_LEAF_CHUNK
+ * references (only the builder's depth limit makes one) is tested a chunk
+ * at a time, the rest pushed as a subtree, so its pops are counted too (a
+ * root group with such a leaf is traced one ray at a time: the packet
+ * traversal has no chunks, which cost it 1%).
+ * When a poll says true the query gives up and answers "no hit" (or "not
+ * occluded") for what it has not seen: wrong, but the caller discards it
+ * (cancel_seen). Normal rays pop a few subtrees and never reach a poll
+ * outside instances; the counter costs no measurable time
+ * (docs/performance.md).
  */
 #include "common/accel.h"
 
@@ -56,6 +72,14 @@
 #endif
 
 #include "common/accel_int.h"
+#include "common/cancel.h"
+
+/* Subtrees a traversal pops between polls of the cancel flag: each pop
+ * follows a leaf (at most ACCEL_LEAF_CHUNK references, instances polling
+ * on their own) or a node none of whose children is hit, after at most
+ * BVH_MAX_DEPTH nodes with one child hit; 1024 of them are well under a
+ * millisecond on any leaf but a CSG, and CSG polls by itself. */
+#define ACCEL_POLL_POPS 1024u
 
 /* ---- rays ------------------------------------------------------------------------ */
 
@@ -371,6 +395,8 @@ static void inst_matrix(const struct ginst *in, mat34 *m)
  */
 static bool inst_hit(const struct accel *A, const struct ginst *in, const struct trace *r, struct hit *h, bool brute)
 {
+	if (cancel_poll()) /* CANCELLATION: nested instances multiply the work */
+		return false;
 	mat34 inv;
 	inst_matrix(in, &inv);
 	struct trace lr;
@@ -398,6 +424,8 @@ static bool inst_hit(const struct accel *A, const struct ginst *in, const struct
 
 static bool inst_occluded(const struct accel *A, const struct ginst *in, const struct trace *r)
 {
+	if (cancel_poll()) /* CANCELLATION */
+		return false;
 	mat34 inv;
 	inst_matrix(in, &inv);
 	struct trace lr;
@@ -651,6 +679,8 @@ static __attribute__((noinline)) bool unb_hit(const struct accel *A, const struc
 {
 	bool found = false;
 	for (uint32_t k = 0; k < g->n_unb; k++) {
+		if (cancel_poll_every(k)) /* CANCELLATION: the list may be long */
+			return found;
 		uint32_t ref = g->unb[k];
 		const struct geom_obj *go = REF_KIND(ref) == REF_XPRIM ? g->xp[REF_IDX(ref)].g : NULL;
 		if (go && go->kind == PRIM_PLANE && !go->has_xform) { /* geom_intersect's plane test, inline */
@@ -704,10 +734,12 @@ static __attribute__((noinline)) bool brute_hit(const struct accel *A, const str
 
 /* The BVH traversal of g's bounded references: nearest child first,
  * subtrees behind the closest hit so far popped and dropped. Same contract
- * as ref_test. */
+ * as ref_test. chunked: g has big leaves (group.big_leaf), tested
+ * ACCEL_LEAF_CHUNK references at a time (CANCELLATION); a constant, so the
+ * common copies have no test (it cost 1% of single rays). */
 static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A, const struct group *g,
 							   struct trace *r, struct cand *best, const struct ray4 *qp,
-							   const uint32_t oct)
+							   const uint32_t oct, const bool chunked)
 {
 	bool found = false;
 	const struct bvh4 *nodes = g->bvh.nodes;
@@ -721,8 +753,15 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 	} stack[3 * BVH_MAX_DEPTH + 4];
 	int sp = 0;
 	uint32_t idx = 0, n = 0;
+	uint32_t polls = ACCEL_POLL_POPS;
 	for (;;) {
 		if (n) {
+			if (chunked && n > ACCEL_LEAF_CHUNK) { /* CANCELLATION: the rest later */
+				stack[sp].idx = idx + ACCEL_LEAF_CHUNK;
+				stack[sp].n = n - ACCEL_LEAF_CHUNK;
+				stack[sp++].t = 0;
+				n = ACCEL_LEAF_CHUNK;
+			}
 			for (uint32_t k = 0; k < n; k++)
 				found |= ref_test(A, g, group_ref(g, idx + k), r, best, false);
 			tmax = box_tmax(r->tmax * q.tscale);
@@ -771,6 +810,11 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 				continue;
 			}
 		}
+		if (__builtin_expect(--polls == 0, 0)) { /* CANCELLATION */
+			polls = ACCEL_POLL_POPS;
+			if (cancel_poll())
+				return found;
+		}
 		/* pop the next subtree still in front of the closest hit */
 		for (;;) {
 			if (sp == 0)
@@ -782,6 +826,16 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 		idx = stack[sp].idx;
 		n = stack[sp].n;
 	}
+}
+
+/* bvh_hit through a tree with big leaves: one copy for every octant (such
+ * trees come only from the builder's depth limit). */
+static __attribute__((noinline)) bool bvh_hit_chunked(const struct accel *A, const struct group *g,
+						       struct trace *r, struct cand *best)
+{
+	struct ray4 q4;
+	ray4_init(&q4, r, g->center);
+	return bvh_hit(A, g, r, best, &q4, q4.oct, true);
 }
 
 /* The unbounded references of g: the start of every closest-hit query.
@@ -815,18 +869,20 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 		if (box_hit(g->bvh.root_b, g->center, r))
 			for (uint32_t k = 0; k < g->bvh.root_n; k++)
 				found |= ref_test(A, g, group_ref(g, g->bvh.root_idx + k), r, &best, false);
+	} else if (__builtin_expect(g->big_leaf, 0)) {
+		found |= bvh_hit_chunked(A, g, r, &best);
 	} else if (g->bvh.n_nodes4) {
 		struct ray4 q4;
 		ray4_init(&q4, r, g->center);
 		switch (q4.oct) { /* one copy of the loop per octant: near planes at fixed offsets */
-		case 0: found |= bvh_hit(A, g, r, &best, &q4, 0); break;
-		case 1: found |= bvh_hit(A, g, r, &best, &q4, 1); break;
-		case 2: found |= bvh_hit(A, g, r, &best, &q4, 2); break;
-		case 3: found |= bvh_hit(A, g, r, &best, &q4, 3); break;
-		case 4: found |= bvh_hit(A, g, r, &best, &q4, 4); break;
-		case 5: found |= bvh_hit(A, g, r, &best, &q4, 5); break;
-		case 6: found |= bvh_hit(A, g, r, &best, &q4, 6); break;
-		default: found |= bvh_hit(A, g, r, &best, &q4, 7); break;
+		case 0: found |= bvh_hit(A, g, r, &best, &q4, 0, false); break;
+		case 1: found |= bvh_hit(A, g, r, &best, &q4, 1, false); break;
+		case 2: found |= bvh_hit(A, g, r, &best, &q4, 2, false); break;
+		case 3: found |= bvh_hit(A, g, r, &best, &q4, 3, false); break;
+		case 4: found |= bvh_hit(A, g, r, &best, &q4, 4, false); break;
+		case 5: found |= bvh_hit(A, g, r, &best, &q4, 5, false); break;
+		case 6: found |= bvh_hit(A, g, r, &best, &q4, 6, false); break;
+		default: found |= bvh_hit(A, g, r, &best, &q4, 7, false); break;
 		}
 	}
 	if (found)
@@ -834,11 +890,19 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 	return found;
 }
 
-static bool group_occluded(const struct accel *A, const struct group *g, struct trace *r)
+/* accel_occluded's query in group g; chunked: g's tree has big leaves,
+ * tested ACCEL_LEAF_CHUNK references at a time (CANCELLATION; a constant
+ * in each copy, since checking leaves' sizes in the common copy cost 1.5%
+ * of a whole render). */
+static inline __attribute__((always_inline)) bool group_occluded_t(const struct accel *A, const struct group *g,
+								    struct trace *r, const bool chunked)
 {
-	for (uint32_t k = 0; k < g->n_unb; k++)
+	for (uint32_t k = 0; k < g->n_unb; k++) {
+		if (cancel_poll_every(k)) /* CANCELLATION, as unb_hit */
+			return false;
 		if (ref_occludes(A, g, g->unb[k], r))
 			return true;
+	}
 	if (g->bvh.root_n) {
 		if (box_hit(g->bvh.root_b, g->center, r))
 			for (uint32_t k = 0; k < g->bvh.root_n; k++)
@@ -857,8 +921,14 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 	} stack[3 * BVH_MAX_DEPTH + 4];
 	int sp = 0;
 	uint32_t idx = 0, n = 0;
+	uint32_t polls = ACCEL_POLL_POPS;
 	for (;;) {
 		if (n) {
+			if (chunked && n > ACCEL_LEAF_CHUNK) { /* CANCELLATION, as bvh_hit */
+				stack[sp].idx = idx + ACCEL_LEAF_CHUNK;
+				stack[sp++].n = n - ACCEL_LEAF_CHUNK;
+				n = ACCEL_LEAF_CHUNK;
+			}
 			for (uint32_t k = 0; k < n; k++)
 				if (ref_occludes(A, g, group_ref(g, idx + k), r))
 					return true;
@@ -879,12 +949,24 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
 				continue;
 			}
 		}
+		if (__builtin_expect(--polls == 0, 0)) { /* CANCELLATION, as bvh_hit */
+			polls = ACCEL_POLL_POPS;
+			if (cancel_poll())
+				return false;
+		}
 		if (sp == 0)
 			return false;
 		sp--;
 		idx = stack[sp].idx;
 		n = stack[sp].n;
 	}
+}
+
+/* Whether anything in g is hit in (r->tmin, r->tmax): group_occluded_t in
+ * the copy g's leaves need. */
+static bool group_occluded(const struct accel *A, const struct group *g, struct trace *r)
+{
+	return g->big_leaf ? group_occluded_t(A, g, r, true) : group_occluded_t(A, g, r, false);
 }
 
 /* ---- packets of four rays ------------------------------------------------------------ */
@@ -952,8 +1034,10 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 	int sp = 0;
 	uint32_t idx = 0, n = 0;
 	__m128 tcur = tmin4; /* the entry distances of the subtree at hand */
+	uint32_t polls = ACCEL_POLL_POPS;
 	for (;;) {
 		if (n) {
+
 			/* the rays that meet the leaf, in front of their closest hit */
 			unsigned lanes = lanes_in_front(tcur, tmax4, inf4);
 			while (lanes) {
@@ -1005,6 +1089,11 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 				tcur = e[cs[0]];
 				continue;
 			}
+		}
+		if (__builtin_expect(--polls == 0, 0)) { /* CANCELLATION, as bvh_hit */
+			polls = ACCEL_POLL_POPS;
+			if (cancel_poll())
+				return;
 		}
 		/* pop the next subtree still in front of some ray's closest hit */
 		for (;;) {
@@ -1092,7 +1181,7 @@ void accel_intersect4(const struct accel *a, const struct ray r[4], struct hit h
 {
 #if defined(__SSE2__)
 	const struct group *g = a->root;
-	bool packet = g && !g->bvh.root_n && g->bvh.n_nodes4;
+	bool packet = g && !g->bvh.root_n && g->bvh.n_nodes4 && !g->big_leaf;
 	uint32_t oct = ray_octant(r[0].d);
 	for (int i = 0; i < 4 && packet; i++)
 		packet = ray_ok(&r[i]) && ray_octant(r[i].d) == oct;

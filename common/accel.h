@@ -61,13 +61,27 @@ struct accel_stats {
 	size_t instance_bytes;   /* size of one instance reference record */
 };
 
-/* Builds the acceleration for the scene's roots. Returns 0 or an error level. */
+/* What accel_build returns when it gave up (CANCEL_RETURN of cancel.h). */
+#define ACCEL_CANCELLED (-2)
+/*
+ * Builds the acceleration for the scene's roots. Returns 0 or an error
+ * level; or ACCEL_CANCELLED, with err->msg "cancelled", everything freed and
+ * *out NULL, when the calling thread's cancel flag (cancel.h) was seen set:
+ * the build polls it in its loops, every few milliseconds of work at most.
+ */
 int accel_build(const struct scene *s, struct accel **out, struct scene_error *err);
 void accel_free(struct accel *a);
 void accel_get_stats(const struct accel *a, struct accel_stats *st);
 /* Bounds of everything bounded in the scene (infinite planes left out);
  * returns false when nothing is bounded. */
 bool accel_bounds(const struct accel *a, vec3 *lo, vec3 *hi);
+
+/* The queries below poll the calling thread's cancel flag (cancel.h) where
+ * one ray's work can grow without bound (nested instances, long lists);
+ * once a poll has seen it set they answer "no hit" or "not occluded"
+ * without looking further, and the caller must discard what it computes
+ * from them (cancel_seen). Without a flag, or until it is seen, they are
+ * exact. */
 
 /* Closest hit in (r->tmin, r->tmax); fills *h and returns true if any. Thread-safe.
  * h->u, h->v and h->mp may be left 0 until accel_hit_surface(a, h): only

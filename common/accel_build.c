@@ -4,12 +4,22 @@
  * into references (accel.c's header describes them), sliver triangles split
  * into several boxes, instance transforms rounded to the float inverse the
  * traversal uses, and the nesting depths checked before anything is built.
+ *
+ * The build polls the calling thread's cancel flag (cancel.h) in every loop
+ * whose length the scene decides (objects, triangles, references, the BVH
+ * builder's) and in the recursions over CSG and instances, and gives up
+ * with ACCEL_CANCELLED when a poll says so; accel_build also checks
+ * cancel_seen at the end, so a build some poll gave up in (csg_bounds
+ * returns an empty box then) is never used.
  */
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
 #include "common/accel_int.h"
+#include "common/cancel.h"
+
+_Static_assert(ACCEL_CANCELLED == CANCEL_RETURN, "accel_build gives up with the core's value");
 
 static const uint32_t tri_ix012[3] = { 0, 1, 2 };
 
@@ -76,21 +86,30 @@ static struct geom_obj *get_gobj(struct accel *A, uint32_t i)
 	return A->gobj[i];
 }
 
-/* Makes the geom_obj of obj and of everything below it (CSG subtrees). */
+/*
+ * Makes the geom_obj of obj and of everything below it (CSG subtrees).
+ * Returns 0, -1 when out of memory, or ACCEL_CANCELLED. The recursion walks
+ * every path through shared defines (exponential in their nesting), so it
+ * polls the cancel flag at each object.
+ */
 static int prep_tree(struct accel *A, uint32_t obj)
 {
+	if (cancel_poll())
+		return ACCEL_CANCELLED;
 	if (!get_gobj(A, obj))
 		return -1;
 	const struct scene_object *o = &A->s->objects[obj];
-	if (o->kind == PRIM_CSG)
-		return prep_tree(A, o->u.csg.operand1) || prep_tree(A, o->u.csg.operand2) ? -1 : 0;
-	if (o->kind == PRIM_INSTANCE) {
+	int rc = 0;
+	if (o->kind == PRIM_CSG) {
+		rc = prep_tree(A, o->u.csg.operand1);
+		if (!rc)
+			rc = prep_tree(A, o->u.csg.operand2);
+	} else if (o->kind == PRIM_INSTANCE) {
 		const struct scene_define *d = &A->s->defines[o->u.instance.define];
-		for (uint32_t k = 0; k < d->n_objects; k++)
-			if (prep_tree(A, d->objects[k]))
-				return -1;
+		for (uint32_t k = 0; k < d->n_objects && !rc; k++)
+			rc = prep_tree(A, d->objects[k]);
 	}
-	return 0;
+	return rc;
 }
 
 /* Pads a box by a relative epsilon so double rounding never culls a hit. */
@@ -286,6 +305,8 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	g->unb = unb;
 	size_t nb = 0;
 	for (uint32_t k = 0; k < n; k++) {
+		if (cancel_poll_every(k))
+			goto cancelled;
 		uint32_t oi = objs[k];
 		const struct scene_object *o = &s->objects[oi];
 		struct geom_box bx;
@@ -366,6 +387,8 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 				ntri = sm->n_triangles;
 			}
 			for (uint32_t q = 0; q < ntri; q++) {
+				if (cancel_poll_every(q))
+					goto cancelled;
 				const uint32_t *ix = tri_ix(m, q);
 				g->tri[g->n_tri].mesh = g->n_mesh;
 				g->tri[g->n_tri].tri = q;
@@ -402,13 +425,18 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			continue;
 		}
 		/* xprim */
-		if (prep_tree(A, oi) < 0)
+		int prc = prep_tree(A, oi);
+		if (prc == ACCEL_CANCELLED)
+			goto cancelled;
+		if (prc < 0)
 			goto oom;
 		struct xprim *xp = &g->xp[g->n_xp];
 		xp->g = A->gobj[oi];
 		xp->obj = oi;
 		ref = REF_MAKE(REF_XPRIM, g->n_xp++);
 		bx = csg_bounds(s, (struct geom_obj *const *)A->gobj, oi);
+		if (cancel_seen()) /* csg_bounds polls too (nested instances in CSG) */
+			goto cancelled;
 		if (bx.lo.x > bx.hi.x || bx.lo.y > bx.hi.y || bx.lo.z > bx.hi.z)
 			continue; /* empty: nothing to draw (e.g. disjoint intersect) */
 		if (!geom_box_finite(bx)) {
@@ -439,11 +467,16 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	/* node bounds are stored relative to the group's centre, padded by
 	 * BOX_PAD_REL of the largest coordinate magnitude around it */
 	struct geom_box world = geom_box_empty();
-	for (uint32_t k = 0; k < n_bounded; k++)
+	for (uint32_t k = 0; k < n_bounded; k++) {
+		if (cancel_poll_every(k))
+			goto cancelled;
 		world = geom_box_union(world, boxes[k]);
+	}
 	g->center = n_bounded ? v3_scale(v3_add(world.lo, world.hi), 0.5) : v3(0, 0, 0);
 	double big = 0;
 	for (uint32_t k = 0; k < n_bounded; k++) {
+		if (cancel_poll_every(k))
+			goto cancelled;
 		boxes[k].lo = v3_sub(boxes[k].lo, g->center);
 		boxes[k].hi = v3_sub(boxes[k].hi, g->center);
 		big = fmax(big, fmax(fmax(fabs(boxes[k].lo.x), fabs(boxes[k].lo.y)), fabs(boxes[k].lo.z)));
@@ -451,6 +484,8 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	}
 	vec3 pad = v3(big * BOX_PAD_REL, big * BOX_PAD_REL, big * BOX_PAD_REL);
 	for (uint32_t k = 0; k < n_bounded; k++) {
+		if (cancel_poll_every(k))
+			goto cancelled;
 		boxes[k].lo = v3_sub(boxes[k].lo, pad);
 		boxes[k].hi = v3_add(boxes[k].hi, pad);
 	}
@@ -465,17 +500,34 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 		g->refs = malloc((n_bounded ? n_bounded : 1) * sizeof *g->refs);
 	if (!perm || (!inst_only && !g->refs))
 		goto oom;
-	if (bvh_build_ex(&g->bvh, boxes, n_bounded, perm, inst_only ? ACCEL_INST_LEAF : ACCEL_MAX_LEAF, inst_only) < 0)
+	int brc = bvh_build_ex(&g->bvh, boxes, n_bounded, perm, inst_only ? ACCEL_INST_LEAF : ACCEL_MAX_LEAF,
+			       inst_only);
+	if (brc == BVH_CANCELLED)
+		goto cancelled;
+	if (brc < 0)
 		goto oom;
+	/* leaves too big to test without polling (only the builder's depth
+	 * limit makes them; a root that is a leaf has at most max_leaf) */
+	for (uint32_t k = 0; k < g->bvh.n_nodes4; k++)
+		for (int c = 0; c < 4; c++)
+			g->big_leaf |= g->bvh.nodes[k].n[c] > ACCEL_LEAF_CHUNK;
 	g->bounds = geom_box_empty();
-	for (uint32_t k = 0; k < n_bounded; k++)
+	for (uint32_t k = 0; k < n_bounded; k++) {
+		if (cancel_poll_every(k))
+			goto cancelled;
 		g->bounds = geom_box_union(g->bounds, boxes[k]);
+	}
 	if (inst_only) { /* bounded instances in leaf order, then the unbounded ones */
 		struct ginst *ord = malloc((size_t)g->n_inst * sizeof *ord);
 		if (!ord)
 			goto oom;
-		for (uint32_t k = 0; k < n_bounded; k++)
+		for (uint32_t k = 0; k < n_bounded; k++) {
+			if (cancel_poll_every(k)) {
+				free(ord);
+				goto cancelled;
+			}
 			ord[k] = g->inst[REF_IDX(all[perm[k]])];
+		}
 		uint32_t next = n_bounded;
 		for (uint32_t k = 0; k < g->n_unb; k++)
 			if (REF_KIND(g->unb[k]) == REF_INST) {
@@ -485,8 +537,11 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 		free(g->inst);
 		g->inst = ord;
 	} else {
-		for (uint32_t k = 0; k < n_bounded; k++)
+		for (uint32_t k = 0; k < n_bounded; k++) {
+			if (cancel_poll_every(k))
+				goto cancelled;
 			g->refs[k] = all[perm[k]];
+		}
 	}
 	if (n_bounded) { /* back to the group's space, covering the padding */
 		g->bounds.lo = v3_add(g->bounds.lo, g->center);
@@ -501,6 +556,9 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	free(all);
 	free(boxes);
 	return g;
+cancelled:
+	scene_errorf(err, ERRLEVEL_FATAL, "cancelled");
+	goto fail;
 oom:
 	scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
 fail:
@@ -532,6 +590,10 @@ static int check_depths(const struct scene *s, struct scene_error *err)
 	for (uint32_t i = 0; i < s->n_defines; i++)
 		def_cd[i] = def_dd[i] = -1;
 	for (uint32_t i = 0; i < s->n_objects; i++) {
+		if (cancel_poll_every(i)) {
+			rc = scene_errorf(err, ERRLEVEL_FATAL, "cancelled");
+			goto out;
+		}
 		const struct scene_object *o = &s->objects[i];
 		unsigned c = 0, d = 0;
 		if (o->kind == PRIM_CSG) {
@@ -579,7 +641,7 @@ int accel_build(const struct scene *s, struct accel **out, struct scene_error *e
 	*out = NULL;
 	int rc = check_depths(s, err);
 	if (rc)
-		return rc;
+		return cancel_seen() ? ACCEL_CANCELLED : rc;
 	struct accel *A = calloc(1, sizeof *A);
 	if (!A)
 		return scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
@@ -592,9 +654,12 @@ int accel_build(const struct scene *s, struct accel **out, struct scene_error *e
 	A->st.bytes = sizeof *A + (size_t)s->n_defines * sizeof(void *);
 	A->st.instance_bytes = sizeof(struct ginst);
 	A->root = build_group(A, s->roots, s->n_roots, err);
-	if (!A->root) {
+	if (!A->root || cancel_seen()) {
 		accel_free(A);
-		return err ? err->level : ERRLEVEL_FATAL;
+		if (!cancel_seen())
+			return err ? err->level : ERRLEVEL_FATAL;
+		scene_errorf(err, ERRLEVEL_FATAL, "cancelled");
+		return ACCEL_CANCELLED;
 	}
 	clock_gettime(CLOCK_MONOTONIC, &t1);
 	A->st.build_seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);

@@ -27,6 +27,12 @@ _Static_assert(LIM_OBJECTS <= ACCEL_MAX_REFS, "object indices fit a reference's 
  * at the cost of more instance tests, so only where instances are many */
 #define ACCEL_INST_LEAF 8
 #define ACCEL_PACK_MIN 1024
+/* References of a leaf a traversal tests before it pops again and counts
+ * (CANCELLATION in accel.c): leaves are never this big but at the BVH
+ * builder's depth limit, which may leave millions of references in one. */
+#define ACCEL_LEAF_CHUNK 64u
+_Static_assert(ACCEL_MAX_LEAF <= ACCEL_LEAF_CHUNK && ACCEL_INST_LEAF <= ACCEL_LEAF_CHUNK,
+	       "ordinary leaves are never split");
 
 struct gsphere {
 	vec3 c;
@@ -88,6 +94,8 @@ struct group {
 	struct geom_box bounds; /* of the bounded references */
 	const struct geom_obj *plane1; /* the only unbounded reference when it is an
 					  untransformed plane (tested inline), else NULL */
+	bool big_leaf;  /* some leaf has more than ACCEL_LEAF_CHUNK references:
+			   no packets through this group (accel.c) */
 	vec3 center;    /* node bounds are relative to this point */
 	size_t bytes;
 };

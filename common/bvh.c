@@ -1,11 +1,20 @@
 /*
  * bvh.c - binned SAH builder (16 bins on each axis over centroid bounds),
  * children stored adjacently, bounds rounded outward to float.
+ *
+ * The builder polls the calling thread's cancel flag (cancel.h) at every
+ * node and every CANCEL_STRIDE items of a node's loops; once a poll says
+ * true every function returns at once, leaving garbage, and bvh_build_ex
+ * frees it and returns BVH_CANCELLED.
  */
 #include "common/bvh.h"
 
 #include <stdlib.h>
 #include <string.h>
+
+#include "common/cancel.h"
+
+_Static_assert(BVH_CANCELLED == CANCEL_RETURN, "the builder gives up with the core's value");
 
 #define BVH_BINS 16
 /* SAH constants relative to one primitive test */
@@ -52,6 +61,8 @@ static uint32_t partition(struct bvh_ctx *B, uint32_t begin, uint32_t end, int a
 {
 	uint32_t i = begin, j = end;
 	while (i < j) {
+		if (cancel_poll_every(i))
+			return i;
 		double c = v3_comp(B->cent[B->perm[i]], axis);
 		int k = (int)((c - lo) * scale);
 		k = k < 0 ? 0 : k >= BVH_BINS ? BVH_BINS - 1 : k;
@@ -67,11 +78,16 @@ static uint32_t partition(struct bvh_ctx *B, uint32_t begin, uint32_t end, int a
 	return i;
 }
 
-/* Builds node ni over perm[begin, end). Recursion depth < BVH_MAX_DEPTH. */
+/* Builds node ni over perm[begin, end). Recursion depth < BVH_MAX_DEPTH.
+ * Returns at once, leaving garbage, when a cancel poll says true. */
 static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t end, int depth)
 {
+	if (cancel_poll())
+		return;
 	struct geom_box bb = geom_box_empty(), cb = geom_box_empty();
 	for (uint32_t i = begin; i < end; i++) {
+		if (cancel_poll_every(i))
+			return;
 		bb = geom_box_union(bb, B->boxes[B->perm[i]]);
 		cb = geom_box_point(cb, B->cent[B->perm[i]]);
 	}
@@ -94,6 +110,8 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 		for (int k = 0; k < BVH_BINS; k++)
 			bin_box[k] = geom_box_empty();
 		for (uint32_t i = begin; i < end; i++) {
+			if (cancel_poll_every(i))
+				return;
 			uint32_t it = B->perm[i];
 			int k = (int)((v3_comp(B->cent[it], axis) - lo) * scale);
 			k = k < 0 ? 0 : k >= BVH_BINS ? BVH_BINS - 1 : k;
@@ -130,6 +148,8 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 		struct geom_box b1 = geom_box_empty(), b2 = geom_box_empty();
 		uint32_t n1 = 0;
 		for (uint32_t i = begin; i < end; i++) {
+			if (cancel_poll_every(i))
+				return;
 			const struct geom_box *ib = &B->boxes[B->perm[i]];
 			if (box_area(*ib) > big_frac[q] * node_area)
 				b1 = geom_box_union(b1, *ib), n1++;
@@ -146,6 +166,8 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 	if (best_big >= 0) {
 		uint32_t i = begin, j = end;
 		while (i < j) {
+			if (cancel_poll_every(i))
+				return;
 			if (box_area(B->boxes[B->perm[i]]) > big_frac[best_big] * node_area) {
 				i++;
 			} else {
@@ -171,6 +193,8 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 			goto leaf;
 		double lo = v3_comp(cb.lo, best_axis), ext = v3_comp(cb.hi, best_axis) - lo;
 		mid = partition(B, begin, end, best_axis, lo, BVH_BINS / ext, best_bin);
+		if (cancel_seen())
+			return;
 		if (mid == begin || mid == end)
 			mid = begin + n / 2;
 	}
@@ -189,11 +213,14 @@ leaf:
 /*
  * Collapses binary node ni (interior) into 4-wide node *next, opening the
  * largest interior child until four children or only leaves remain;
- * children's nodes follow in depth-first order. Returns its index.
+ * children's nodes follow in depth-first order. Returns its index (garbage
+ * when a cancel poll says true).
  */
 static uint32_t collapse(const struct bvh_node *nodes, uint32_t ni, struct bvh4 *out, uint32_t *next)
 {
 	uint32_t me = (*next)++;
+	if (cancel_seen() || cancel_poll_every(me)) /* seen: the other subtrees too */
+		return me;
 	uint32_t ch[4] = { nodes[ni].idx, nodes[ni].idx + 1, 0, 0 };
 	int nc = 2;
 	while (nc < 4) {
@@ -260,6 +287,10 @@ int bvh_build_ex(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32
 	}
 	build_node(&B, 0, 0, n, 0);
 	free(B.cent);
+	if (cancel_seen()) {
+		free(B.nodes);
+		return BVH_CANCELLED;
+	}
 	b->n_nodes = B.n_nodes;
 	memcpy(b->root_b, B.nodes[0].b, sizeof b->root_b);
 	b->root_idx = B.nodes[0].idx;
@@ -273,6 +304,11 @@ int bvh_build_ex(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32
 		}
 		uint32_t next = 0;
 		collapse(B.nodes, 0, b->nodes, &next);
+		if (cancel_seen()) {
+			free(B.nodes);
+			bvh_free(b);
+			return BVH_CANCELLED;
+		}
 		b->n_nodes4 = next;
 		struct bvh4 *fit = realloc(b->nodes, (size_t)next * sizeof *fit);
 		if (fit)

@@ -46,11 +46,15 @@ struct bvh {
 	uint32_t n_nodes;       /* binary nodes the builder made (statistics) */
 };
 
+/* What the builder returns when it gave up (CANCEL_RETURN of cancel.h). */
+#define BVH_CANCELLED (-2)
 /*
  * Builds over n items with finite boxes. perm (n entries, caller-owned) gets
  * the items in leaf order. max_leaf bounds the items of a leaf unless the
  * depth limit or identical centroids force more. n == 0 gives an empty tree
- * (n_nodes == 0). Returns 0, or -1 when out of memory.
+ * (n_nodes == 0). Returns 0, -1 when out of memory, or BVH_CANCELLED when
+ * the calling thread's cancel flag (cancel.h) was seen set (polled every
+ * node and every CANCEL_STRIDE items); *b is then empty.
  */
 int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf);
 /* The same; with pack, every subtree of at most max_leaf items is a leaf

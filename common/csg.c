@@ -19,11 +19,18 @@
  * in the material owner's space), computed in the leaf's space and carried
  * up through each node's transform, so nested transforms and instances work
  * at any depth.
+ *
+ * An operand that is a defined object is evaluated member by member, so
+ * nested defines make the work exponential in their depth (64): eval and
+ * csg_bounds poll the calling thread's cancel flag (cancel.h) at every
+ * node, and give up (no crossings; an empty box) once it is seen set.
  */
 #include "common/geom.h"
 
 #include <stdlib.h>
 #include <string.h>
+
+#include "common/cancel.h"
 
 struct csg_x {
 	double t;
@@ -133,6 +140,8 @@ static void mesh_crossings(const struct scene *s, uint32_t obj, vec3 o, vec3 d, 
 	geom_wray_init(&w, o, d);
 	size_t start = b->n;
 	for (uint32_t k = 0; k < m->n_triangles; k++) {
+		if (cancel_poll_every(k)) /* every triangle is tested, with no tree */
+			break;
 		const uint32_t *ix = &m->tris[3 * (size_t)k];
 		vec3 a = m->vertices[ix[0]], bb = m->vertices[ix[1]], c = m->vertices[ix[2]];
 		double t, b1, b2;
@@ -170,6 +179,8 @@ static void mesh_crossings(const struct scene *s, uint32_t obj, vec3 o, vec3 d, 
  */
 static bool eval(const struct csg_env *E, uint32_t obj, vec3 o, vec3 d, struct csg_buf *b)
 {
+	if (cancel_poll())
+		return false;
 	const struct geom_obj *g = E->gobj[obj];
 	const struct scene_object *so = &E->s->objects[obj];
 	vec3 lo = o, ld = d;
@@ -275,6 +286,8 @@ static struct geom_box box_isect(struct geom_box a, struct geom_box b)
 
 struct geom_box csg_bounds(const struct scene *s, struct geom_obj *const *gobj, uint32_t obj)
 {
+	if (cancel_poll())
+		return geom_box_empty();
 	const struct geom_obj *g = gobj[obj];
 	const struct scene_object *so = &s->objects[obj];
 	struct geom_box b;

@@ -1,6 +1,13 @@
 /*
  * filter.c - the camera's filters layered in the order written (filter.h,
  * docs/camera.md).
+ *
+ * Layered filters multiply a pixel into up to LIM_RAYS_PER_SAMPLE rays per
+ * corner, and adaptive into up to 257 x 257 corners, so a pixel may take
+ * hours: every sample polls the calling thread's cancel flag (cancel.h),
+ * and once it is seen set the remaining samples are skipped (black) and
+ * loops end, so the pixel returns at once with a wrong colour that the
+ * caller discards.
  */
 #include "common/filter.h"
 
@@ -10,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "common/cancel.h"
 #include "common/rng.h"
 
 /* Purpose tag for the filters' own random numbers (the layer index is added),
@@ -160,6 +168,8 @@ static uint64_t seed_of(uint32_t x, uint32_t y, uint64_t s)
 static vec3 expand(struct walk *w, int layer, struct sample smp)
 {
 	const struct filter_chain *fc = w->fc;
+	if (cancel_poll()) /* CANCELLATION: a wrong colour, never used */
+		return v3(0, 0, 0);
 	if (layer == fc->n_layers) {
 		struct ray r = smp.lens ? cam_lens_ray(&fc->cam, smp.px, smp.py, smp.lu, smp.lv, smp.focal)
 					: cam_ray(&fc->cam, smp.px, smp.py);
@@ -171,6 +181,8 @@ static vec3 expand(struct walk *w, int layer, struct sample smp)
 	vec3 sum = v3(0, 0, 0);
 	double wsum = 0;
 	for (uint64_t k = 0; k < n; k++) {
+		if (k && cancel_poll()) /* as at the top: the samples left are skipped */
+			break;
 		struct sample c = smp;
 		c.s = smp.s * n + k;
 		double weight = 1.0;

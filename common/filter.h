@@ -67,6 +67,8 @@ void filter_scratch_free(struct filter_scratch *sc);
  * Colour of pixel (x, y) (linear, unclamped): a pure function of the chain,
  * fn and the pixel. *rays (may be NULL) is increased by the eye rays traced.
  * scratch comes from filter_scratch_new for this chain (NULL: no cache).
+ * Polls the calling thread's cancel flag (cancel.h) at every sample: once
+ * it is seen set, the colour (and any corner cached in scratch) is wrong.
  */
 vec3 filter_pixel(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x,
 		  uint32_t y, filter_trace_fn fn, void *arg, uint64_t *rays);

@@ -204,11 +204,15 @@ static inline bool geom_tri_hit(const struct geom_wray *w, vec3 a, vec3 b, vec3 
  * Surfaces with no inside and open cylinders follow docs/language.md.
  * Thread-safe; allocates only when a ray has more than
  * CSG_STACK_CROSSINGS crossings (and then treats out-of-memory as a miss).
+ * Once the calling thread's cancel flag is seen set (cancel.h) the result
+ * is wrong (crossings left out), to be discarded.
  */
 bool csg_hit(const struct scene *s, struct geom_obj *const *gobj, uint32_t obj, vec3 o, vec3 d,
 	     double tmin, double tmax, struct hit *h);
 
-/* Bounds of object obj in its parent space (CSG and instances recursively). */
+/* Bounds of object obj in its parent space (CSG and instances recursively);
+ * wrong (parts left out) once the calling thread's cancel flag is seen set
+ * (cancel.h), which the caller checks with cancel_seen. */
 struct geom_box csg_bounds(const struct scene *s, struct geom_obj *const *gobj, uint32_t obj);
 
 #endif

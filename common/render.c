@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "common/accel.h"
+#include "common/cancel.h"
 #include "common/filter.h"
 #include "common/shade.h"
 
@@ -34,13 +35,26 @@ struct renderer {
 
 int renderer_new(const struct scene *s, struct renderer **out, struct scene_error *err)
 {
+	return renderer_new_cancellable(s, out, err, NULL);
+}
+
+_Static_assert(RENDERER_CANCELLED == ACCEL_CANCELLED, "the build's give-up value is the renderer's");
+
+/* The build runs in a cancel scope (cancel.h) whose polls accel_build and
+ * bvh_build_ex make in their loops; shade_ctx_new and the camera are quick. */
+int renderer_new_cancellable(const struct scene *s, struct renderer **out, struct scene_error *err,
+			     atomic_int *cancel)
+{
 	*out = NULL;
 	struct renderer *r = calloc(1, sizeof *r);
 	if (!r)
 		return scene_errorf(err, ERRLEVEL_FATAL, "out of memory");
 	r->s = s;
 	atomic_init(&r->rays, 0);
+	struct cancel_scope saved;
+	cancel_enter(cancel, &saved);
 	int rc = accel_build(s, &r->accel, err);
+	cancel_leave(&saved);
 	if (rc)
 		goto fail;
 	rc = shade_ctx_new(s, r->accel, &r->shade, err);
@@ -122,12 +136,14 @@ static void eye_block(const struct renderer *r, const uint32_t px[4], const uint
 		out[k] = ok[k] ? shade_eye_hit(r->shade, &u[k], hit[k] ? &h[k] : NULL, seed[k]) : v3(0, 0, 0);
 }
 
-/* renderer_tile_cancellable for a filter_single_ray chain, in 2x2 blocks. */
-static int tile_blocks(const struct renderer *r, struct tile_rect t, uint8_t *rgb, atomic_int *cancel,
-		       uint64_t *rays)
+/* renderer_tile_cancellable for a filter_single_ray chain, in 2x2 blocks;
+ * stops at the first block that finds the thread's cancel flag set. */
+static void tile_blocks(const struct renderer *r, struct tile_rect t, uint8_t *rgb, uint64_t *rays)
 {
 	for (uint32_t j = 0; j < t.h; j += 2) {
 		for (uint32_t i = 0; i < t.w; i += 2) {
+			if (cancel_poll())
+				return;
 			uint32_t px[4], py[4];
 			uint8_t *dst[4];
 			int n = 0;
@@ -153,39 +169,53 @@ static int tile_blocks(const struct renderer *r, struct tile_rect t, uint8_t *rg
 				filter_quantise(c[k], dst[k]);
 			*rays += (uint64_t)n;
 		}
-		if (cancel && atomic_load_explicit(cancel, memory_order_relaxed))
-			return 0;
 	}
-	return 1;
 }
 
-int renderer_tile_cancellable(const struct renderer *r, struct tile_rect t, uint8_t *rgb,
-			      atomic_int *cancel)
+/* renderer_tile_cancellable for any other chain, pixel by pixel; stops at
+ * the first pixel that finds the thread's cancel flag set. */
+static void tile_pixels(const struct renderer *r, struct tile_rect t, uint8_t *rgb, uint64_t *rays)
 {
-	uint64_t rays = 0;
-	if (filter_single_ray(&r->fc)) {
-		int complete = tile_blocks(r, t, rgb, cancel, &rays);
-		atomic_fetch_add_explicit(&((struct renderer *)r)->rays, rays, memory_order_relaxed);
-		return complete;
-	}
 	struct filter_scratch *scratch = filter_scratch_new(&r->fc); /* NULL: no cache, same colours */
-	int complete = 1;
-	for (uint32_t j = 0; j < t.h && complete; j++) {
+	for (uint32_t j = 0; j < t.h; j++) {
 		uint8_t *row = rgb + (size_t)j * t.w * 3;
 		for (uint32_t i = 0; i < t.w; i++) {
+			if (cancel_poll())
+				goto out;
 			uint64_t x = (uint64_t)t.x + i, y = (uint64_t)t.y + j;
 			if (x >= r->w || y >= r->h) {
 				memset(row + (size_t)i * 3, 0, 3);
 				continue;
 			}
-			vec3 c = filter_pixel(&r->fc, scratch, (uint32_t)x, (uint32_t)y, trace_shade,
-					      (void *)r, &rays);
+			vec3 c = filter_pixel(&r->fc, scratch, (uint32_t)x, (uint32_t)y, trace_shade, (void *)r, rays);
 			filter_quantise(c, row + (size_t)i * 3);
 		}
-		if (cancel && atomic_load_explicit(cancel, memory_order_relaxed))
-			complete = 0;
 	}
+out:
 	filter_scratch_free(scratch);
+}
+
+/*
+ * The tile runs in a cancel scope of its own (cancel.h): besides the polls
+ * here, one per 2x2 block or pixel, the filters poll once per sample,
+ * shading once per light of a shading point, and the traversal when it
+ * enters an instance and every ACCEL_POLL_POPS subtrees, so one
+ * pathological ray is abandoned too. Whatever they computed after a poll
+ * saw the flag is wrong, so the tile is complete only when no poll did:
+ * then every pixel is exactly what a run without a flag gives.
+ */
+int renderer_tile_cancellable(const struct renderer *r, struct tile_rect t, uint8_t *rgb,
+			      atomic_int *cancel)
+{
+	struct cancel_scope saved;
+	cancel_enter(cancel, &saved);
+	uint64_t rays = 0;
+	if (filter_single_ray(&r->fc))
+		tile_blocks(r, t, rgb, &rays);
+	else
+		tile_pixels(r, t, rgb, &rays);
+	int complete = !cancel_seen();
+	cancel_leave(&saved);
 	/* the counter is statistics only: casting away const is safe, r was
 	 * allocated non-const by renderer_new */
 	atomic_fetch_add_explicit(&((struct renderer *)r)->rays, rays, memory_order_relaxed);

@@ -20,8 +20,26 @@ struct tile_rect {
 
 struct renderer;
 
-/* Builds the acceleration and shading state for a scene (which must outlive it). */
+/*
+ * Builds the acceleration and shading state for a scene (which must outlive
+ * it). Returns 0, or an error level (ERRLEVEL_*) with err filled in.
+ */
 int renderer_new(const struct scene *s, struct renderer **out, struct scene_error *err);
+
+/* What renderer_new_cancellable returns when it gave up: distinct from
+ * every error level (those are positive). */
+#define RENDERER_CANCELLED (-2)
+/*
+ * renderer_new, giving up when *cancel (may be NULL: never) becomes
+ * non-zero: the acceleration build polls it in its loops (a few
+ * milliseconds of work apart at most, whatever the scene), and then
+ * everything built so far is freed, *out is NULL, err holds "cancelled"
+ * (level ERRLEVEL_FATAL, for callers that print it) and the return value is
+ * RENDERER_CANCELLED. A build that finished is used even if the flag is set
+ * afterwards.
+ */
+int renderer_new_cancellable(const struct scene *s, struct renderer **out, struct scene_error *err,
+			     atomic_int *cancel);
 void renderer_free(struct renderer *r);
 
 /* Image size as the scene states it (or as overridden with renderer_set_size). */
@@ -43,10 +61,14 @@ int renderer_set_size(struct renderer *r, uint32_t w, uint32_t h);
  */
 void renderer_tile(const struct renderer *r, struct tile_rect t, uint8_t *rgb);
 /*
- * As renderer_tile, but gives up between rows of pixels (pairs of rows for
- * filter standard's 2x2 blocks) when cancel (may be NULL)
- * becomes non-zero. Returns 1 when the whole tile is in rgb, 0 when it gave up
- * (rgb then holds a partial tile: do not use it).
+ * As renderer_tile, but gives up when *cancel (may be NULL: never) becomes
+ * non-zero, within a few milliseconds of work whatever the scene: the flag
+ * is polled per pixel (per 2x2 block for filter standard), per filter
+ * sample, per light of a shading point, and inside the traversal of a
+ * ray, so one ray through 2^63 nested instances is abandoned too
+ * (common/cancel.h). Returns 1 when the whole tile is in rgb, exactly as
+ * renderer_tile gives it; 0 when it gave up (rgb then holds a partial,
+ * partly wrong tile: do not use it).
  */
 int renderer_tile_cancellable(const struct renderer *r, struct tile_rect t, uint8_t *rgb,
 			      atomic_int *cancel);

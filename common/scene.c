@@ -607,37 +607,51 @@ uint32_t scene_find_define(const struct scene *s, const char *name)
 /* a + b, saturating at UINT64_MAX: nested instances multiply counts quickly */
 static uint64_t sat_add(uint64_t a, uint64_t b) { return a > UINT64_MAX - b ? UINT64_MAX : a + b; }
 
-/* Per define: its triangle count once known (for object_tris). */
-struct tri_memo {
-	uint64_t n;
+/* What an object draws, through every instance: triangles (a raw mesh
+ * counts its own) and primitives (a raw mesh counts one), each saturating
+ * at UINT64_MAX. */
+struct drawn {
+	uint64_t tris, prims;
+};
+
+/* Per define: what it draws, once known (for object_drawn). */
+struct drawn_memo {
+	struct drawn n;
 	bool known;
 };
 
-/* Triangles drawn by object i, through instances (saturating at UINT64_MAX);
- * memo caches per-define counts. */
-static uint64_t object_tris(const struct scene *s, uint32_t i, struct tri_memo *memo)
+static struct drawn drawn_add(struct drawn a, struct drawn b)
+{
+	return (struct drawn){ sat_add(a.tris, b.tris), sat_add(a.prims, b.prims) };
+}
+
+/* What object i draws (struct drawn); memo caches per-define counts, so
+ * each define is counted once however often it is used (nested64.sce's
+ * 2^63 spheres take 64 steps). CSG nodes are not cached: the parser makes
+ * every operand an object of its own, so only defines are shared. */
+static struct drawn object_drawn(const struct scene *s, uint32_t i, struct drawn_memo *memo)
 {
 	const struct scene_object *o = &s->objects[i];
 	switch (o->kind) {
 	case PRIM_TRIANGLE:
-		return 1;
+		return (struct drawn){ 1, 1 };
 	case PRIM_RAW:
-		return s->meshes[o->u.raw.mesh].n_triangles;
+		return (struct drawn){ s->meshes[o->u.raw.mesh].n_triangles, 1 };
 	case PRIM_CSG:
-		return sat_add(object_tris(s, o->u.csg.operand1, memo), object_tris(s, o->u.csg.operand2, memo));
+		return drawn_add(object_drawn(s, o->u.csg.operand1, memo), object_drawn(s, o->u.csg.operand2, memo));
 	case PRIM_INSTANCE: {
 		uint32_t d = o->u.instance.define;
 		if (!memo[d].known) {
-			uint64_t n = 0;
+			struct drawn n = { 0, 0 };
 			for (uint32_t k = 0; k < s->defines[d].n_objects; k++)
-				n = sat_add(n, object_tris(s, s->defines[d].objects[k], memo));
+				n = drawn_add(n, object_drawn(s, s->defines[d].objects[k], memo));
 			memo[d].n = n;
 			memo[d].known = true;
 		}
 		return memo[d].n;
 	}
-	default:
-		return 0;
+	default: /* sphere, plane, cylinder, box, disk, polygon */
+		return (struct drawn){ 0, 1 };
 	}
 }
 
@@ -655,10 +669,13 @@ void scene_stats(const struct scene *s, struct scene_stats *st)
 		else
 			st->materials_anon++;
 	}
-	struct tri_memo *memo = calloc(s->n_defines ? s->n_defines : 1, sizeof *memo);
+	struct drawn_memo *memo = calloc(s->n_defines ? s->n_defines : 1, sizeof *memo);
 	if (memo) {
+		struct drawn n = { 0, 0 };
 		for (uint32_t i = 0; i < s->n_roots; i++)
-			st->triangles_instanced = sat_add(st->triangles_instanced, object_tris(s, s->roots[i], memo));
+			n = drawn_add(n, object_drawn(s, s->roots[i], memo));
+		st->triangles_instanced = n.tris;
+		st->prims_instanced = n.prims;
 		free(memo);
 	}
 }

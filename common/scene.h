@@ -363,11 +363,17 @@ uint32_t scene_find_define(const struct scene *s, const char *name);
 /* The material used where none is given: white and matt (docs/language.md). */
 const struct scene_material *scene_default_material(void);
 
-/* Counts for --check and benchmarks. */
+/* Counts for --check and benchmarks. The "as drawn" counts saturate at
+ * UINT64_MAX, which therefore means "UINT64_MAX or more". */
 struct scene_stats {
 	uint32_t by_kind[PRIM_KIND_COUNT]; /* objects by kind, as stored */
 	uint64_t triangles;     /* mesh triangles counted once per mesh */
 	uint64_t triangles_instanced; /* as drawn: through every instance */
+	uint64_t prims_instanced; /* primitives as drawn, through every instance
+				     and CSG operand: spheres, planes, cylinders,
+				     boxes, triangles, disks, polygons, and raw
+				     meshes counting one each (CSG nodes and
+				     instances themselves count none) */
 	uint32_t materials_named, materials_anon;
 };
 void scene_stats(const struct scene *s, struct scene_stats *st);

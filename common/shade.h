@@ -21,7 +21,8 @@ void shade_ctx_free(struct shade_ctx *c);
  * Colour seen along an eye ray (linear RGB, not clamped). seed is the
  * (pixel, sample) stream from rng_seed(); every random choice below (area
  * light samples) derives from it, so the result is a pure function of
- * (scene, ray, seed). Thread-safe.
+ * (scene, ray, seed). Thread-safe. Polls the calling thread's cancel flag
+ * (cancel.h): once it is seen set, the colour is wrong (work skipped).
  */
 vec3 shade_trace(const struct shade_ctx *c, const struct ray *r, uint64_t seed);
 

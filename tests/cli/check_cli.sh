@@ -31,7 +31,26 @@ echo "$out" | grep -qx 'definitions: 1' || fail "definitions line"
 echo "$out" | grep -qx 'instances: 2' || fail "instances line"
 echo "$out" | grep -qx 'materials: 2 (1 named, 1 inline)' || fail "materials line"
 echo "$out" | grep -qx 'triangles: 1 stored, 1 drawn (every instance counted)' || fail "triangles line"
+# pair (sphere, box) twice, the triangle, the csg's sphere and disk: 2 + 2 + 1 + 2
+echo "$out" | grep -qx 'primitive instances: 7' || fail "primitive instances line"
 [ -s "$T/err" ] && fail "unexpected stderr: $(cat "$T/err")"
+
+# primitive instances through nested defines: exact up to 2^64 - 1, then "at least"
+out=$("$M" --check tests/data/hostile/nested64.sce) || fail "nested64 --check exit $?"
+echo "$out" | grep -qx 'primitive instances: 9223372036854775808' || fail "nested64: 2^63 primitive instances"
+{
+	echo 'define object name a1 object sphere ; ; ;'
+	i=2
+	while [ $i -le 33 ]; do
+		p=a$((i - 1))
+		echo "object name a$i object $p ; ; object $p ; ; object $p ; ; object $p ; ; ;"
+		i=$((i + 1))
+	done
+	echo '; object a33 ; ; object triangle ; ;'
+} >"$T/quad.sce"
+out=$("$M" --check "$T/quad.sce") || fail "4^32 --check exit $?"
+echo "$out" | grep -qx 'primitive instances: at least 18446744073709551615' || fail "4^32 + 1 primitives: saturated"
+echo "$out" | grep -qx 'triangles: 1 stored, 1 drawn (every instance counted)' || fail "4^32 scene's triangle"
 
 # errors: stderr only, exit code = level
 printf 'light samples 3 ;\n' >"$T/l2.sce"

@@ -12,7 +12,9 @@
  * Packets: accel_intersect4 gives every ray exactly accel_intersect's hit,
  * for four unrelated rays (mostly of different octants) and for four
  * neighbouring rays from one origin (the packet traversal), also with a
- * window (tmin > 0, finite tmax) and along an axis.
+ * window (tmin > 0, finite tmax) and along an axis. The builder's depth
+ * limit leaves a leaf of hundreds of items (the traversals test such leaves
+ * a chunk at a time: CANCELLATION in accel.c).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -529,12 +531,88 @@ static void builder(void)
 	}
 }
 
+/*
+ * A leaf far bigger than ACCEL_LEAF_CHUNK (64) from the builder alone:
+ * boxes in planes x = c, one at c = -1, a chain at c = 2^-8k (k < 70),
+ * each 256 times closer to 0 than the last so that binning peels one off
+ * per level, and 300 more at c = i 2^-700, left together in one leaf when
+ * the depth limit stops the peeling. Through accel_build the padding of
+ * item boxes merges centroids this close (they become one place: median
+ * splits, small leaves), so the same triangles there only check extreme
+ * coordinates: rays along x through them (closest, occluded, packets) get
+ * brute force's hits, bit for bit. The chunked traversal itself was
+ * checked by building with ACCEL_LEAF_CHUNK 2 (every tree then has big
+ * leaves): this file, test_accel and test_render all agreed.
+ */
+#define CHAIN 70
+#define CLUSTER 300
+static void big_leaf(void)
+{
+	struct scene *s = scene_new();
+	struct scene_error err;
+	struct geom_box bx[1 + CHAIN + CLUSTER];
+	uint32_t perm[1 + CHAIN + CLUSTER];
+	for (int i = 0; i < 1 + CHAIN + CLUSTER; i++) {
+		double c = i == 0 ? -1 : i <= CHAIN ? ldexp(1, -8 * (i - 1)) : ldexp(i - CHAIN - 1, -700);
+		struct scene_object o;
+		scene_object_defaults(&o, PRIM_TRIANGLE);
+		o.u.triangle.a = v3(c, 0, 0);
+		o.u.triangle.b = v3(c, 1e-3, 0);
+		o.u.triangle.c = v3(c, 0, 1e-3);
+		uint32_t id;
+		CHECK(scene_add_object(s, &o, &id, &err) == 0);
+		CHECK(scene_add_root(s, id, &err) == 0);
+		bx[i].lo = v3(c, 0, 0);
+		bx[i].hi = v3(c, 1e-3, 1e-3);
+	}
+	/* the builder alone makes the big leaf */
+	struct bvh b;
+	CHECK(bvh_build(&b, bx, 1 + CHAIN + CLUSTER, perm, 4) == 0);
+	uint32_t biggest = 0;
+	for (uint32_t ni = 0; ni < b.n_nodes4; ni++)
+		for (int c = 0; c < 4; c++)
+			if (!isnan(b.nodes[ni].lo[0][c]) && b.nodes[ni].n[c] > biggest)
+				biggest = b.nodes[ni].n[c];
+	printf("big leaf: %u items in the biggest leaf\n", biggest);
+	CHECK(biggest > 4 * 64);
+	bvh_free(&b);
+
+	struct accel *a;
+	CHECK(accel_build(s, &a, &err) == 0);
+	int mismatch = 0, hits = 0;
+	for (int i = 0; i < 2000; i++) {
+		/* from just before the cluster (or from beyond the chain, backward) */
+		double y = 4e-4 * rng_uniform(21, 2 * i), z = 4e-4 * rng_uniform(21, 2 * i + 1); /* y + z < 1e-3: inside */
+		bool back = i % 4 == 3;
+		struct ray r[4];
+		for (int k = 0; k < 4; k++) {
+			r[k].o = back ? v3(2, y, z) : v3(-1e-300, y, z);
+			r[k].d = v3(back ? -1 : 1, 1e-6 * k, -1e-6 * k);
+			r[k].tmin = 0;
+			r[k].tmax = i % 8 == 1 ? 1e-200 : INFINITY; /* a window ending inside the cluster */
+		}
+		struct hit h, hb, h4[4];
+		bool hit4[4];
+		bool f = accel_intersect(a, &r[0], &h), fb = accel_intersect_brute(a, &r[0], &hb);
+		mismatch += !same_hit(f, &h, fb, &hb);
+		mismatch += accel_occluded(a, &r[0]) != fb;
+		accel_intersect4(a, r, h4, hit4);
+		mismatch += !same_hit(hit4[0], &h4[0], f, &h);
+		hits += f;
+	}
+	printf("big leaf: 2000 rays, %d hits, %d mismatches\n", hits, mismatch);
+	CHECK(mismatch == 0 && hits == 2000);
+	accel_free(a);
+	scene_free(s);
+}
+
 int main(void)
 {
 	const char *full = getenv("PORTRAY_TEST_FULL");
 	if (full && *full && strcmp(full, "0") != 0)
 		n_rays = N_RAYS_FULL;
 	builder();
+	big_leaf();
 	far_away();
 	mixed();
 	many_instances();

@@ -136,6 +136,7 @@ static void test_builder(void)
 	struct scene_stats st;
 	scene_stats(s, &st);
 	CHECK(st.by_kind[PRIM_SPHERE] == 1 && st.by_kind[PRIM_CSG] == 1 && st.by_kind[PRIM_INSTANCE] == 1);
+	CHECK(st.prims_instanced == 4); /* the instance twice: a csg of sphere and box */
 	CHECK(st.materials_named == 1);
 	scene_free(s);
 	scene_free(NULL);
@@ -175,6 +176,7 @@ static void test_mesh_stats(void)
 	scene_stats(s, &st);
 	CHECK(st.triangles == 1);
 	CHECK(st.triangles_instanced == 5);
+	CHECK(st.prims_instanced == 5); /* a raw mesh is one primitive */
 	/* a mesh index out of range is refused */
 	struct scene_mesh bad = { 0 };
 	bad.n_vertices = 1;
@@ -225,6 +227,7 @@ static void test_stats_saturate(void)
 	scene_stats(s, &st);
 	CHECK(st.triangles == 1);
 	CHECK(st.triangles_instanced == UINT64_MAX);
+	CHECK(st.prims_instanced == UINT64_MAX);
 	scene_free(s);
 }
 
