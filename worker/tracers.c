@@ -67,10 +67,9 @@ static void job_fail_locked(struct wk_tracers *t, struct wk_job *j)
  */
 static int build_renderer(const struct scene *s, struct renderer **r, struct scene_error *err, struct wk_entry *e)
 {
-	/* TODO(merge): renderer_new_cancellable(s, r, err, &e->cancel), which
-	 * returns RENDERER_CANCELLED (-2) = WK_BUILD_CANCELLED */
-	(void)e;
-	return renderer_new(s, r, err);
+	_Static_assert(RENDERER_CANCELLED == WK_BUILD_CANCELLED, "one value for a cancelled build");
+	int rc = renderer_new_cancellable(s, r, err, &e->cancel);
+	return rc == RENDERER_CANCELLED ? WK_BUILD_CANCELLED : rc ? WK_BUILD_FAILED : WK_BUILD_OK;
 }
 
 /* Decodes and builds e on a tracer thread, without the lock: fills the
