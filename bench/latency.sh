@@ -7,8 +7,9 @@
 #   - the farm at 0 ms against a local -j 2 render (local/farm: 1.00 = as
 #     fast as rendering here; the proxy's own cost is in it);
 #   - the farm at 2 and 20 ms against the same farm at 0 ms (t0/td: 1.00 =
-#     the latency costs nothing; the master keeps 2 x threads + 2 tiles in
-#     flight per worker to hide it);
+#     the latency costs nothing; the master sizes each worker's window of
+#     tiles in flight from its round trip and tile rate to hide it; targets:
+#     >= 0.9 at 2 ms with the default tile size, >= 0.8 at 20 ms);
 #   - whether every image is byte-identical to the local render.
 # Processes on 127.0.0.1 with OS-chosen ports, all killed on exit.
 BIN=${BIN:-bin}

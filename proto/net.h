@@ -26,6 +26,12 @@ int net_accept(int lfd, char *peer, size_t peerlen);
 int net_connect_start(const char *host, const char *port, char *err, size_t errlen);
 /* After the fd became writable: 0 if connected, or -1 with err. */
 int net_connect_finish(int fd, char *err, size_t errlen);
+/*
+ * Writes value and a newline to path through a temporary file renamed over
+ * it, so a reader (a test waiting for --port-file) never sees half of it.
+ * 0, or -1 (errno).
+ */
+int net_write_number(const char *path, long value);
 /* Monotonic clock in seconds. */
 double net_now(void);
 

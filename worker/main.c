@@ -80,21 +80,6 @@ static void usage(FILE *f)
 		PROTO_DEFAULT_PORT, WK_CACHE_MB_DEFAULT);
 }
 
-/* Writes the port to path through a temporary file, so that a reader never
- * sees half of it. 0 or -1 (errno). */
-static int write_port_file(const char *path, int port)
-{
-	char tmp[4096];
-	snprintf(tmp, sizeof tmp, "%s.tmp", path);
-	FILE *f = fopen(tmp, "w");
-	if (!f)
-		return -1;
-	fprintf(f, "%d\n", port);
-	if (fclose(f) != 0 || rename(tmp, path) != 0)
-		return -1;
-	return 0;
-}
-
 /* A whole decimal number in lo..hi from text: 0 with *out, or -1. */
 static int parse_long(const char *text, long lo, long hi, long *out)
 {
@@ -201,7 +186,7 @@ static int start_listening(const char *listen_at, const char *port_file, char *h
 		return -WK_EXIT_UNAVAILABLE;
 	}
 	*bound = net_local_port(lfd);
-	if (port_file && write_port_file(port_file, *bound) < 0) {
+	if (port_file && net_write_number(port_file, *bound) < 0) {
 		fprintf(stderr, "portray-worker: cannot write %s: %s\n", port_file, strerror(errno));
 		close(lfd);
 		return -WK_EXIT_CANTCREAT;

@@ -264,19 +264,6 @@ static void accept_all(int lfd, double now)
 	}
 }
 
-static int write_port_file(const char *path, int port)
-{
-	char tmp[4096];
-	snprintf(tmp, sizeof tmp, "%s.tmp", path);
-	FILE *f = fopen(tmp, "w");
-	if (!f)
-		return -1;
-	fprintf(f, "%d\n", port);
-	if (fclose(f) != 0 || rename(tmp, path) != 0)
-		return -1;
-	return 0;
-}
-
 static void usage(FILE *f)
 {
 	fprintf(f, "Usage: delayproxy --listen HOST:PORT [--port-file F] --to HOST:PORT --delay-ms D\n"
@@ -343,7 +330,7 @@ int main(int argc, char **argv)
 		fprintf(stderr, "delayproxy: %s\n", err);
 		return 69;
 	}
-	if (port_file && write_port_file(port_file, net_local_port(lfd)) < 0) {
+	if (port_file && net_write_number(port_file, net_local_port(lfd)) < 0) {
 		fprintf(stderr, "delayproxy: cannot write %s: %s\n", port_file, strerror(errno));
 		return 73;
 	}

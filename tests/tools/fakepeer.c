@@ -111,19 +111,6 @@ static int signals_init(void)
 	return 0;
 }
 
-static int write_file(const char *path, long value)
-{
-	char tmp[4096];
-	snprintf(tmp, sizeof tmp, "%s.tmp", path);
-	FILE *f = fopen(tmp, "w");
-	if (!f)
-		return -1;
-	fprintf(f, "%ld\n", value);
-	if (fclose(f) != 0 || rename(tmp, path) != 0)
-		return -1;
-	return 0;
-}
-
 /* poll() timeout in ms until `at` (seconds, net_now's clock); -1 for INFINITY. */
 static int ms_until(double at, double now)
 {
@@ -527,7 +514,7 @@ static int main_worker(int argc, char **argv)
 		perror("fakepeer: pipe");
 		return 71;
 	}
-	if (port_file && write_file(port_file, net_local_port(lfd)) < 0) {
+	if (port_file && net_write_number(port_file, net_local_port(lfd)) < 0) {
 		fprintf(stderr, "fakepeer: cannot write %s: %s\n", port_file, strerror(errno));
 		return 73;
 	}
@@ -599,7 +586,7 @@ static int hold_loop(const char *host, const char *port, struct fp_slot *s, long
 		}
 		if (connected == n && !ready_written) {
 			fp_log("all %ld connections open (the worker greeted each)", n);
-			if (ready_file && write_file(ready_file, n) < 0)
+			if (ready_file && net_write_number(ready_file, n) < 0)
 				fp_log("cannot write %s: %s", ready_file, strerror(errno));
 			ready_written = true;
 		}
