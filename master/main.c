@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "common/tiles.h"
 #include "master/master.h"
 
 static void usage(FILE *f)
@@ -19,21 +20,23 @@ static void usage(FILE *f)
 		"  -o, --output FILE        output image, .png or .ppm (default: SCENE with .png)\n"
 		"      --check              parse the scene, print a summary, exit with its error level\n"
 		"  -j, --threads N          local threads (default: all cores)\n"
-		"      --tile N             tile side in pixels (default 32)\n"
+		"      --tile N             tile side in pixels (default %u)\n"
 		"      --size WxH           override the image statement's size\n"
 		"  -q, --quiet              no progress bar or summary\n"
 		"  -w, --workers LIST       HOST:PORT[,HOST:PORT...] of portray-worker daemons\n"
 		"      --workers-file FILE  one HOST:PORT per line ('#' comments)\n"
 		"      --secret-file FILE   shared secret for the worker handshake\n"
 		"      --no-local           do not trace on this machine, workers only\n"
-		"      --heartbeat-timeout S  drop a worker silent for S seconds (default 10)\n"
+		"      --heartbeat-timeout S  drop a worker silent for S seconds, or stalled that long\n"
+		"                           in a handshake step or scene transfer (default 10)\n"
 		"      --audit F            re-render fraction F (0..1) of worker tiles here to check\n"
 		"                           them (default 0.03; 0: no audits; see docs/protocol.md)\n"
 		"  -h, --help               show this help\n"
 		"  -V, --version            show the version\n"
 		"\n"
 		"Exit status: 0 success; 1 and 2 the PortRAY manual's error levels (Appendix B);\n"
-		"64 usage; 69 no worker left with --no-local; 74 output not written.\n");
+		"64 usage; 69 no worker left with --no-local; 74 output not written.\n",
+		TILE_DEFAULT);
 }
 
 static int parse_uint(const char *s, unsigned long max, unsigned long *out)
