@@ -16,6 +16,7 @@
 #include "master/farm.h"
 
 #include <errno.h>
+#include <poll.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -48,8 +49,112 @@ void farm_check_alive(struct farm *f)
 	for (uint32_t i = 0; i < f->n_w; i++)
 		if (!f->w[i].dropped)
 			return;
+	if (f->lfd >= 0) {
+		/* workers may still dial in: wait for them */
+		if (!f->said_waiting)
+			farm_log(f, "no worker connected: waiting for workers to dial in on %s", f->o->accept);
+		f->said_waiting = true;
+		return;
+	}
 	f->rc = EXIT_NO_WORKERS;
 	ev_stop(f->loop);
+}
+
+/* ---- workers that dial in (--accept) ---- */
+
+/* A slot for a worker that dialled in: a new one, or one whose connection
+ * never delivered anything (a flood of peers that do not finish their
+ * handshake must not use up the room of real workers). */
+static struct worker *accept_slot(struct farm *f)
+{
+	uint32_t live = 0;
+	struct worker *reuse = NULL;
+	for (uint32_t i = 0; i < f->n_w; i++) {
+		struct worker *w = &f->w[i];
+		if (!w->accepted)
+			continue;
+		if (w->state != W_IDLE)
+			live++;
+		else if (!reuse && w->delivered == 0 && w->tiles_done == 0)
+			reuse = w;
+	}
+	if (live >= FARM_ACCEPT_MAX)
+		return NULL;
+	if (reuse) {
+		uint16_t index = reuse->index;
+		worker_free(reuse);
+		return worker_init(f, reuse, &(struct worker_addr){ "", "", "" }, index) < 0 ? NULL : reuse;
+	}
+	if (f->n_w == f->cap_w)
+		return NULL;
+	struct worker *w = &f->w[f->n_w];
+	if (worker_init(f, w, &(struct worker_addr){ "", "", "" }, (uint16_t)f->n_w) < 0)
+		return NULL;
+	f->n_w++;
+	return w;
+}
+
+static void on_accept(struct ev_loop *l, int lfd, short revents, void *arg)
+{
+	(void)l;
+	(void)revents;
+	struct farm *f = arg;
+	for (int k = 0; k < 16; k++) {
+		char peer[96];
+		int fd = net_accept(lfd, peer, sizeof peer);
+		if (fd < 0)
+			return;
+		struct worker *w = atomic_load(sched_stop_flag(f->s)) ? NULL : accept_slot(f);
+		if (!w) {
+			close(fd);
+			farm_log(f, "worker %s refused: no room for more workers that dial in (%d at once)", peer,
+				 FARM_ACCEPT_MAX);
+			continue;
+		}
+		snprintf(w->addr.name, sizeof w->addr.name, "%s", peer);
+		snprintf(w->addr.host, sizeof w->addr.host, "%.*s", (int)(strrchr(peer, ':') - peer), peer);
+		w->name = w->addr.name;
+		if (!f->o->quiet)
+			farm_log(f, "worker %s dialled in", peer);
+		f->said_waiting = false;
+		worker_accepted(w, fd);
+	}
+}
+
+/* Listens for workers that dial in; 0, or -1 with a message printed. */
+static int start_accepting(struct farm *f)
+{
+	char host[NET_HOST_LEN], port[NET_PORT_LEN], err[300];
+	if (net_parse_hostport(f->o->accept, host, port, err, sizeof err) < 0) {
+		fprintf(stderr, "portray-master: --accept: %s\n", err);
+		return -1;
+	}
+	f->lfd = net_listen(host, port, err, sizeof err);
+	if (f->lfd < 0) {
+		fprintf(stderr, "portray-master: --accept: %s\n", err);
+		return -1;
+	}
+	int bound = net_local_port(f->lfd);
+	if (f->o->port_file && net_write_number(f->o->port_file, bound) < 0) {
+		fprintf(stderr, "portray-master: cannot write %s: %s\n", f->o->port_file, strerror(errno));
+		return -1;
+	}
+	if (ev_io_set(f->loop, f->lfd, POLLIN, on_accept, f) < 0) {
+		fprintf(stderr, "portray-master: out of memory\n");
+		return -1;
+	}
+	if (!f->o->quiet)
+		farm_log(f, "accepting workers on %s:%d", host, bound);
+	return 0;
+}
+
+static void stop_accepting(struct farm *f)
+{
+	if (f->lfd < 0)
+		return;
+	ev_io_del(f->loop, f->lfd);
+	close(f->lfd);
+	f->lfd = -1;
 }
 
 /* ---- local threads: a tile source over the scheduler ---- */
@@ -178,6 +283,7 @@ static void wake_loop(void *arg)
 /* Says goodbye to every connected worker, giving the bytes a moment to leave. */
 static void farm_bye(struct farm *f)
 {
+	stop_accepting(f);
 	for (uint32_t i = 0; i < f->n_w; i++)
 		worker_bye(&f->w[i]);
 	double until = net_now() + 1.0;
@@ -223,13 +329,17 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	f.width = w;
 	f.height = h;
 	f.cancel = cancel;
+	f.lfd = -1;
 	int rc = EXIT_USAGE;
 	struct worker_addr *addrs = NULL;
 	struct tile_pool *pool = NULL;
 	struct local L;
 	char err[600];
 
-	if (workers_parse(o->workers, o->workers_file, &addrs, &f.n_w, err, sizeof err) < 0) {
+	uint32_t named = 0;
+	if ((o->workers || o->workers_file || !o->accept) &&
+	    (workers_parse(o->workers, o->workers_file, &addrs, &named, err, sizeof err) < 0 ||
+	     workers_expand(&addrs, &named, err, sizeof err) < 0)) {
 		fprintf(stderr, "portray-master: %s\n", err);
 		goto out;
 	}
@@ -253,18 +363,21 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	uint64_t salt = 0;
 	if (o->audit > 0 && proto_random((uint8_t *)&salt, sizeof salt) < 0)
 		salt = mix64((uint64_t)getpid() ^ (uint64_t)(net_now() * 1e9));
+	f.cap_w = named + (o->accept ? FARM_ACCEPT_MAX * 4 : 0);
 	f.loop = ev_new();
-	f.s = f.loop ? sched_new(&f.tg, f.n_w, image, o->audit, salt, wake_loop, &f) : NULL;
-	f.w = calloc(f.n_w, sizeof *f.w);
+	f.s = f.loop ? sched_new(&f.tg, f.cap_w, image, o->audit, salt, wake_loop, &f) : NULL;
+	f.w = calloc(f.cap_w, sizeof *f.w);
 	if (!f.loop || !f.s || !f.w) {
 		fprintf(stderr, "portray-master: out of memory for %u tiles\n", f.tg.n);
 		goto out;
 	}
-	for (uint32_t i = 0; i < f.n_w; i++)
-		if (worker_init(&f, &f.w[i], &addrs[i], (uint16_t)i) < 0) {
+	for (; f.n_w < named; f.n_w++)
+		if (worker_init(&f, &f.w[f.n_w], &addrs[f.n_w], (uint16_t)f.n_w) < 0) {
 			fprintf(stderr, "portray-master: out of memory\n");
 			goto out;
 		}
+	if (o->accept && start_accepting(&f) < 0)
+		goto out;
 	ev_on_wake(f.loop, on_wake, &f);
 	interrupt_on_cancel(wake_loop, &f);
 
@@ -304,6 +417,8 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 
 out:
 	interrupt_on_cancel(NULL, NULL);
+	if (f.loop)
+		stop_accepting(&f);
 	if (pool) {
 		sched_stop(f.s);
 		tile_pool_join(pool);

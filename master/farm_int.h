@@ -30,6 +30,8 @@
 #define FARM_HANG_HB 3.0
 /* before a worker's first result (no median yet): this many heartbeat timeouts */
 #define FARM_HANG_HB_FIRST 10.0
+/* workers that dialled in (--accept) connected at once, at most */
+#define FARM_ACCEPT_MAX 256
 /* a worker's scene build may take this many heartbeat timeouts ... */
 #define FARM_BUILD_HB 10.0
 /* ... plus this many times the master's own build of the same scene */
@@ -65,6 +67,7 @@ struct worker {
 	double retry_at;
 	int retries;
 	bool dropped;           /* for good */
+	bool accepted;          /* it dialled in (--accept): lost is gone, never redialled */
 	char why[300];          /* why it was last lost or dropped */
 	uint8_t nonce[PROTO_NONCE_BYTES], peer_nonce[PROTO_NONCE_BYTES];
 	uint32_t threads;
@@ -102,7 +105,9 @@ struct farm {
 	struct sched *s;
 	struct tiling tg;
 	struct worker *w;
-	uint32_t n_w;
+	uint32_t n_w, cap_w;    /* workers so far, and room (named + FARM_ACCEPT_MAX with --accept) */
+	int lfd;                /* --accept's listening socket, or -1 */
+	bool said_waiting;      /* "waiting for workers to dial in" printed */
 	const uint8_t *scene;   /* encoded scene */
 	size_t scene_len;
 	uint8_t hash[PROTO_HASH_BYTES];
@@ -130,6 +135,8 @@ int worker_init(struct farm *f, struct worker *w, const struct worker_addr *a, u
 void worker_free(struct worker *w);
 /* Starts (or restarts) the connection. */
 void worker_start(struct worker *w);
+/* Takes over fd, a connection the worker dialled (--accept), and shakes hands. */
+void worker_accepted(struct worker *w, int fd);
 /* Tops up w's tiles in flight (when it takes tiles). */
 void worker_dispatch(struct worker *w);
 /* Drops w if an audit caught it, and says so. */

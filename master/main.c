@@ -9,6 +9,7 @@
 
 #include "common/tiles.h"
 #include "master/master.h"
+#include "proto/net.h"
 
 static void usage(FILE *f)
 {
@@ -24,7 +25,12 @@ static void usage(FILE *f)
 		"      --size WxH           override the image statement's size\n"
 		"  -q, --quiet              no progress bar or summary\n"
 		"  -w, --workers LIST       HOST:PORT[,HOST:PORT...] of portray-worker daemons\n"
-		"      --workers-file FILE  one HOST:PORT per line ('#' comments)\n"
+		"      --workers-file FILE  one HOST:PORT per line ('#' comments); a name with several\n"
+		"                           addresses (-w too) is one worker per address\n"
+		"      --accept ADDR:PORT   take workers that dial in (portray-worker --connect);\n"
+		"                           port 0 = any (see --port-file)\n"
+		"      --port-file FILE     write the --accept port to FILE\n"
+		"      --insecure           allow --accept beyond loopback without --secret-file\n"
 		"      --secret-file FILE   shared secret for the worker handshake\n"
 		"      --no-local           do not trace on this machine, workers only\n"
 		"      --heartbeat-timeout S  drop a worker silent for S seconds, or stalled that long\n"
@@ -50,7 +56,8 @@ static int parse_uint(const char *s, unsigned long max, unsigned long *out)
 	return 0;
 }
 
-enum { OPT_CHECK = 256, OPT_TILE, OPT_SIZE, OPT_WFILE, OPT_SECRET, OPT_NOLOCAL, OPT_HB, OPT_AUDIT };
+enum { OPT_CHECK = 256, OPT_TILE, OPT_SIZE, OPT_WFILE, OPT_SECRET, OPT_NOLOCAL, OPT_HB, OPT_AUDIT, OPT_ACCEPT,
+       OPT_PORTFILE, OPT_INSECURE };
 
 int main(int argc, char **argv)
 {
@@ -68,6 +75,9 @@ int main(int argc, char **argv)
 		{ "no-local", no_argument, NULL, OPT_NOLOCAL },
 		{ "heartbeat-timeout", required_argument, NULL, OPT_HB },
 		{ "audit", required_argument, NULL, OPT_AUDIT },
+		{ "accept", required_argument, NULL, OPT_ACCEPT },
+		{ "port-file", required_argument, NULL, OPT_PORTFILE },
+		{ "insecure", no_argument, NULL, OPT_INSECURE },
 		{ "help", no_argument, NULL, 'h' },
 		{ "version", no_argument, NULL, 'V' },
 		{ NULL, 0, NULL, 0 },
@@ -111,6 +121,9 @@ int main(int argc, char **argv)
 		case OPT_WFILE: o.workers_file = optarg; break;
 		case OPT_SECRET: o.secret_file = optarg; break;
 		case OPT_NOLOCAL: o.no_local = true; break;
+		case OPT_ACCEPT: o.accept = optarg; break;
+		case OPT_PORTFILE: o.port_file = optarg; break;
+		case OPT_INSECURE: o.insecure = true; break;
 		case OPT_HB: {
 			char *end;
 			o.heartbeat_s = strtod(optarg, &end);
@@ -140,5 +153,20 @@ int main(int argc, char **argv)
 		return EXIT_USAGE;
 	}
 	o.scene = argv[optind];
+	if (o.accept) {
+		/* refused at once, before any parsing or tracing */
+		char host[NET_HOST_LEN], port[NET_PORT_LEN], err[300];
+		if (net_parse_hostport(o.accept, host, port, err, sizeof err) < 0) {
+			fprintf(stderr, "portray-master: --accept: %s\n", err);
+			return EXIT_USAGE;
+		}
+		if (!o.secret_file && !o.insecure && !net_is_loopback(host)) {
+			fprintf(stderr,
+				"portray-master: --accept %s without --secret-file would let anyone who reaches it\n"
+				"portray-master: pose as a worker; give --secret-file (docs/deploy.md) or --insecure\n",
+				o.accept);
+			return EXIT_USAGE;
+		}
+	}
 	return o.check ? master_check(&o) : master_render(&o);
 }

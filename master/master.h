@@ -31,6 +31,9 @@ struct master_opts {
 	const char *workers;   /* -w HOST:PORT[,HOST:PORT...] */
 	const char *workers_file; /* --workers-file F */
 	const char *secret_file;  /* --secret-file F */
+	const char *accept;       /* --accept ADDR:PORT: workers that dial in (--connect) */
+	const char *port_file;    /* --port-file F: the --accept port, written once listening */
+	bool insecure;            /* --insecure: --accept beyond loopback without a secret */
 	bool no_local;         /* --no-local */
 	double heartbeat_s;    /* --heartbeat-timeout S (farm) */
 	double audit;          /* --audit F: fraction of worker tiles re-rendered here to check them (farm);

@@ -125,7 +125,7 @@ int master_render(const struct master_opts *o)
 	watching = true;
 	uint64_t total = render_tile_count(w, h, o->tile), finished = 0;
 	int threads = o->threads > 0 ? o->threads : render_ncpus();
-	bool farm = o->workers || o->workers_file;
+	bool farm = o->workers || o->workers_file || o->accept;
 	if (farm) {
 		rc = farm_render(o, enc, enc_len, t_build - t_parse, r, w, h, image, &cancel);
 		if (rc && !atomic_load(&cancel))

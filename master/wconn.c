@@ -194,7 +194,11 @@ static void worker_lost(struct worker *w, bool fatal, const char *fmt, ...)
 	vsnprintf(w->why, sizeof w->why, fmt, ap);
 	va_end(ap);
 	worker_close(w);
-	if (!fatal && w->retries < FARM_MAX_RETRIES && !atomic_load(sched_stop_flag(f->s))) {
+	if (w->accepted) {
+		/* it dialled us: it may dial again (as a new worker), we cannot */
+		w->dropped = true;
+		farm_log(f, "worker %s gone: %s", w->name, w->why);
+	} else if (!fatal && w->retries < FARM_MAX_RETRIES && !atomic_load(sched_stop_flag(f->s))) {
 		w->retry_at = net_now() + FARM_BACKOFF_S * pow(2, w->retries);
 		w->retries++;
 		farm_log(f, "worker %s lost: %s (retry %d of %d in %.1f s)", w->name, w->why, w->retries,
@@ -568,14 +572,10 @@ static void on_input(struct worker *w)
 		worker_lost(w, false, "%s", why);
 }
 
-static void on_connected(struct worker *w)
+/* Connected (either way): our HELLO, and without a secret our OFFER. */
+static void begin_handshake(struct worker *w)
 {
 	struct farm *f = w->f;
-	char err[300];
-	if (net_connect_finish(w->fd, err, sizeof err) < 0) {
-		worker_lost(w, false, "%s", err);
-		return;
-	}
 	/* an unauthenticated peer gets no big buffers from us */
 	proto_conn_set_limit(w->pc, LIM_HANDSHAKE_PAYLOAD);
 	w->last_hb = net_now();
@@ -590,6 +590,16 @@ static void on_connected(struct worker *w)
 		return;
 	}
 	set_state(w, W_HELLO, f->hb_timeout);
+}
+
+static void on_connected(struct worker *w)
+{
+	char err[300];
+	if (net_connect_finish(w->fd, err, sizeof err) < 0) {
+		worker_lost(w, false, "%s", err);
+		return;
+	}
+	begin_handshake(w);
 }
 
 static void on_io(struct ev_loop *l, int fd, short re, void *arg)
@@ -627,6 +637,23 @@ void worker_start(struct worker *w)
 	}
 	w->fd = fd;
 	set_state(w, W_CONNECTING, f->hb_timeout);
+}
+
+void worker_accepted(struct worker *w, int fd)
+{
+	struct farm *f = w->f;
+	w->accepted = true;
+	w->connections++;
+	if (!(w->pc = proto_conn_new(fd)) || ev_io_set(f->loop, fd, POLLIN, on_io, w) < 0) {
+		if (!w->pc)
+			close(fd);
+		worker_lost(w, true, "out of memory");
+		return;
+	}
+	w->fd = fd;
+	begin_handshake(w);
+	if (w->pc)
+		flush(w);
 }
 
 void worker_bye(struct worker *w)

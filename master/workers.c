@@ -4,6 +4,7 @@
 #include "master/workers.h"
 
 #include <errno.h>
+#include <netdb.h>
 #include <fcntl.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -161,5 +162,62 @@ int workers_parse(const char *list, const char *file, struct worker_addr **out, 
 		return -1;
 	}
 	*out = w;
+	return 0;
+}
+
+/* The distinct numeric addresses of host:port, in resolver order; how many (0: none). */
+static int addresses(const struct worker_addr *a, char out[][64], int max)
+{
+	struct addrinfo hints, *res = NULL;
+	memset(&hints, 0, sizeof hints);
+	hints.ai_family = AF_UNSPEC;
+	hints.ai_socktype = SOCK_STREAM;
+	if (getaddrinfo(a->host, a->port, &hints, &res) != 0)
+		return 0;
+	int n = 0;
+	for (struct addrinfo *ai = res; ai && n < max; ai = ai->ai_next) {
+		char host[NET_HOST_LEN];
+		if (getnameinfo(ai->ai_addr, ai->ai_addrlen, host, sizeof host, NULL, 0, NI_NUMERICHOST) != 0)
+			continue;
+		bool seen = false;
+		for (int i = 0; i < n && !seen; i++)
+			seen = strcmp(out[i], host) == 0;
+		if (!seen)
+			snprintf(out[n++], 64, "%.63s", host);
+	}
+	freeaddrinfo(res);
+	return n;
+}
+
+int workers_expand(struct worker_addr **w, uint32_t *n, char *err, size_t errlen)
+{
+	struct worker_addr *out = calloc(WORKERS_MAX, sizeof *out);
+	char addr[64][64]; /* numeric addresses: at most 45 bytes and a scope */
+	if (!out) {
+		snprintf(err, errlen, "out of memory");
+		return -1;
+	}
+	uint32_t m = 0;
+	for (uint32_t i = 0; i < *n; i++) {
+		const struct worker_addr *a = &(*w)[i];
+		int k = addresses(a, addr, 64);
+		if (m + (k > 1 ? (uint32_t)k : 1) > WORKERS_MAX) {
+			snprintf(err, errlen, "%s: more than %d workers once names are resolved", a->name, WORKERS_MAX);
+			free(out);
+			return -1;
+		}
+		if (k <= 1) {
+			out[m++] = *a;
+			continue;
+		}
+		for (int j = 0; j < k; j++, m++) {
+			out[m] = *a;
+			snprintf(out[m].host, sizeof out[m].host, "%.63s", addr[j]);
+			snprintf(out[m].name, sizeof out[m].name, "%.200s/%.63s", a->name, addr[j]);
+		}
+	}
+	free(*w);
+	*w = out;
+	*n = m;
 	return 0;
 }

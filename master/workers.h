@@ -33,4 +33,13 @@ struct worker_addr {
 int workers_parse(const char *list, const char *file, struct worker_addr **out, uint32_t *n, char *err,
 		  size_t errlen);
 
+/*
+ * Replaces every entry whose host resolves to several addresses (A and AAAA
+ * records: a Kubernetes headless Service, a round-robin name) by one entry
+ * per address, named "NAME:PORT/ADDRESS", keeping the order. A name that
+ * does not resolve (yet) stays as it is: connecting retries it later.
+ * Returns 0, or -1 with err (more than WORKERS_MAX in all, out of memory).
+ */
+int workers_expand(struct worker_addr **w, uint32_t *n, char *err, size_t errlen);
+
 #endif

@@ -197,3 +197,26 @@ int net_write_number(const char *path, long value)
 		return -1;
 	return 0;
 }
+
+bool net_is_loopback(const char *host)
+{
+	struct addrinfo hints, *res = NULL;
+	memset(&hints, 0, sizeof hints);
+	hints.ai_socktype = SOCK_STREAM;
+	if (!*host || getaddrinfo(host, NULL, &hints, &res) != 0)
+		return false;
+	bool all = res != NULL;
+	for (struct addrinfo *a = res; a; a = a->ai_next) {
+		if (a->ai_family == AF_INET) {
+			const struct sockaddr_in *s4 = (const struct sockaddr_in *)a->ai_addr;
+			all &= (ntohl(s4->sin_addr.s_addr) >> 24) == 127;
+		} else if (a->ai_family == AF_INET6) {
+			const struct sockaddr_in6 *s6 = (const struct sockaddr_in6 *)a->ai_addr;
+			all &= IN6_IS_ADDR_LOOPBACK(&s6->sin6_addr) != 0;
+		} else {
+			all = false;
+		}
+	}
+	freeaddrinfo(res);
+	return all;
+}

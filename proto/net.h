@@ -5,6 +5,7 @@
 #ifndef PORTRAY_NET_H
 #define PORTRAY_NET_H
 
+#include <stdbool.h>
 #include <stddef.h>
 
 #define NET_HOST_LEN 256
@@ -32,6 +33,9 @@ int net_connect_finish(int fd, char *err, size_t errlen);
  * 0, or -1 (errno).
  */
 int net_write_number(const char *path, long value);
+/* Whether host (numeric or a name) names only loopback addresses
+ * (127.0.0.0/8, ::1, "localhost"); false when it cannot be resolved. */
+bool net_is_loopback(const char *host);
 /* Monotonic clock in seconds. */
 double net_now(void);
 

@@ -33,6 +33,7 @@
 #include <stdint.h>
 
 #include "proto/evloop.h"
+#include "proto/net.h"
 #include "proto/proto.h"
 #include "worker/cache.h"
 #include "worker/tracers.h"
@@ -72,6 +73,7 @@ struct wk_conn {
 	bool logged;                    /* the job's line (or the refusal) is written */
 	bool dirty;                     /* output queued by the done handler: flush it */
 	bool budgeted;                  /* counted in n_authed or n_unauth */
+	bool dialed;                    /* we dialled the master (--connect): dial.c redials when it goes */
 	/* lists */
 	struct wk_conn *prev, *next;    /* every connection */
 	struct wk_conn *uprev, *unext;  /* unauthenticated ones, oldest first */
@@ -88,10 +90,22 @@ struct wk_ratelog {
 	unsigned long logged, suppressed;
 };
 
+/* --connect: the master this worker dials, again after every job (dial.c) */
+struct wk_dial {
+	bool on;
+	char host[NET_HOST_LEN], port[NET_PORT_LEN];
+	struct ev_timer t;              /* the next attempt */
+	int fd;                         /* a connect in progress, or -1 */
+	double delay;                   /* back-off: 0.5 s doubling to WK_DIAL_MAX_S */
+	unsigned failures;              /* attempts failed since the last connection */
+	bool busy;                      /* a dialled connection is open */
+};
+
 struct wk_server {
 	struct wk_opts *opt;            /* (the fault hooks count tiles in it) */
 	struct ev_loop *loop;
-	int lfd;
+	int lfd;                        /* the listening socket, or -1 (--connect only) */
+	struct wk_dial dial;
 	struct ev_timer t_accept;       /* resumes accepting (out of descriptors, or evictions paced) */
 	bool accept_starved;            /* out of descriptors: logged once until an accept works */
 	double evict_credit;            /* evictions allowed now (WK_EVICT_RATE, WK_EVICT_BURST) */
@@ -131,8 +145,19 @@ bool wk_server_authed(struct wk_server *srv, struct wk_conn *c);
 /* Takes c out of the connection budgets (it is closing), and out of the
  * server's list too when `gone` (it is being freed). Idempotent. */
 void wk_server_forget(struct wk_server *srv, struct wk_conn *c, bool gone);
+/* Links a new connection into the server's list (not into any budget). */
+void wk_server_link(struct wk_server *srv, struct wk_conn *c);
 /* Log one line of a kind a flood could repeat (struct wk_ratelog). */
 void wk_log_limited(struct wk_ratelog *rl, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* ---- dial.c ---- */
+
+/* --connect HOST:PORT: starts dialling (at once). 0, or -1 with err. */
+int wk_dial_start(struct wk_server *srv, const char *hostport, char *err, size_t errlen);
+/* A dialled connection is gone; served: it got a job (dial again at once),
+ * otherwise after the back-off. */
+void wk_dial_lost(struct wk_server *srv, bool served);
+void wk_dial_stop(struct wk_server *srv);
 
 /* ---- conn.c ---- */
 

@@ -33,7 +33,7 @@ void wk_log(const char *fmt, ...)
 	time_t t = time(NULL);
 	struct tm tm;
 	gmtime_r(&t, &tm);
-	strftime(ts, sizeof ts, "%H:%M:%S", &tm);
+	strftime(ts, sizeof ts, "%Y-%m-%dT%H:%M:%SZ", &tm); /* ISO 8601, UTC */
 	va_list ap;
 	va_start(ap, fmt);
 	flockfile(stderr);
@@ -68,6 +68,8 @@ static void usage(FILE *f)
 		"Render tiles for portray-master: a daemon serving several masters at once.\n"
 		"\n"
 		"      --listen ADDR:PORT  where to listen (default 127.0.0.1:%d; port 0 = any)\n"
+		"      --connect HOST:PORT dial a master started with --accept instead (again after\n"
+		"                          every job, with back-off while none answers)\n"
 		"  -j, --threads N         tracing threads (default: all cores)\n"
 		"      --secret-file F     shared secret: masters must prove they know it\n"
 		"      --port-file F       write the port listened on to F (useful with port 0)\n"
@@ -92,15 +94,16 @@ static int parse_long(const char *text, long lo, long hi, long *out)
 	return 0;
 }
 
-enum { OPT_LISTEN = 256, OPT_SECRET, OPT_PORTFILE, OPT_CACHE, OPT_FAULT, OPT_DELAY, OPT_HANDSHAKE };
+enum { OPT_LISTEN = 256, OPT_CONNECT, OPT_SECRET, OPT_PORTFILE, OPT_CACHE, OPT_FAULT, OPT_DELAY, OPT_HANDSHAKE };
 
 /* Command line into o and the listen, secret and port-file strings; 0, or
  * the exit code (-1: --help or --version printed, exit 0). */
-static int parse_args(int argc, char **argv, struct wk_opts *o, const char **listen_at, const char **secret_file,
-		      const char **port_file)
+static int parse_args(int argc, char **argv, struct wk_opts *o, const char **listen_at, const char **connect_to,
+		      const char **secret_file, const char **port_file)
 {
 	static const struct option longopts[] = {
 		{ "listen", required_argument, NULL, OPT_LISTEN },
+		{ "connect", required_argument, NULL, OPT_CONNECT },
 		{ "threads", required_argument, NULL, 'j' },
 		{ "secret-file", required_argument, NULL, OPT_SECRET },
 		{ "port-file", required_argument, NULL, OPT_PORTFILE },
@@ -117,6 +120,7 @@ static int parse_args(int argc, char **argv, struct wk_opts *o, const char **lis
 	while ((c = getopt_long(argc, argv, "j:hV", longopts, NULL)) != -1) {
 		switch (c) {
 		case OPT_LISTEN: *listen_at = optarg; break;
+		case OPT_CONNECT: *connect_to = optarg; break;
 		case 'j':
 			if (parse_long(optarg, 0, 4096, &v) < 0) {
 				fprintf(stderr, "portray-worker: -j wants a number 0..4096, not '%s'\n", optarg);
@@ -199,8 +203,9 @@ int main(int argc, char **argv)
 	struct wk_opts opt;
 	memset(&opt, 0, sizeof opt);
 	atomic_init(&opt.faults.traced, 0);
-	const char *listen_at = "127.0.0.1:7411", *secret_file = NULL, *port_file = NULL;
-	int rc = parse_args(argc, argv, &opt, &listen_at, &secret_file, &port_file);
+	/* listening is the default; with --connect only when --listen is given too */
+	const char *listen_at = NULL, *connect_to = NULL, *secret_file = NULL, *port_file = NULL;
+	int rc = parse_args(argc, argv, &opt, &listen_at, &connect_to, &secret_file, &port_file);
 	if (rc)
 		return rc < 0 ? WK_EXIT_OK : rc;
 	char err[512], warn[512];
@@ -211,12 +216,22 @@ int main(int argc, char **argv)
 	}
 	if (secret_file && warn[0])
 		fprintf(stderr, "portray-worker: warning: --secret-file %s\n", warn);
-	char host[NET_HOST_LEN];
-	int bound = -1;
-	int lfd = start_listening(listen_at, port_file, host, &bound);
-	if (lfd < 0) {
-		free(opt.secret);
-		return -lfd;
+	char host[NET_HOST_LEN] = "";
+	int bound = -1, lfd = -1;
+	if (!connect_to && !listen_at)
+		listen_at = "127.0.0.1:7411";
+	if (listen_at) {
+		lfd = start_listening(listen_at, port_file, host, &bound);
+		if (lfd < 0) {
+			free(opt.secret);
+			return -lfd;
+		}
+		if (!opt.secret && !net_is_loopback(host))
+			fprintf(stderr,
+				"portray-worker: WARNING: listening on %s without --secret-file: anyone who can reach\n"
+				"portray-worker: WARNING: port %d can make this machine trace for them; make a secret\n"
+				"portray-worker: WARNING: (docs/deploy.md) or listen on 127.0.0.1\n",
+				host, bound);
 	}
 	signal(SIGPIPE, SIG_IGN);
 	/* the tracer threads are born with SIGTERM and SIGINT blocked, so the
@@ -229,9 +244,18 @@ int main(int argc, char **argv)
 	static struct wk_server srv;
 	rc = wk_server_init(&srv, &opt, lfd);
 	if (rc) {
-		close(lfd);
+		if (lfd >= 0)
+			close(lfd);
 		free(opt.secret);
 		return rc;
+	}
+	if (connect_to && wk_dial_start(&srv, connect_to, err, sizeof err) < 0) {
+		fprintf(stderr, "portray-worker: --connect: %s\n", err);
+		wk_server_free(&srv);
+		if (lfd >= 0)
+			close(lfd);
+		free(opt.secret);
+		return WK_EXIT_USAGE;
 	}
 	g_for_signals = &srv;
 	struct sigaction sa;
@@ -240,8 +264,12 @@ int main(int argc, char **argv)
 	sigaction(SIGTERM, &sa, NULL);
 	sigaction(SIGINT, &sa, NULL);
 	pthread_sigmask(SIG_SETMASK, &old, NULL);
-	wk_log("listening on %s:%d, %d threads, protocol %u, %s%s", host, bound, srv.threads, PROTO_VERSION,
-	       proto_build_id(), opt.secret ? ", secret required" : "");
+	if (lfd >= 0)
+		wk_log("listening on %s:%d, %d threads, protocol %u, %s%s", host, bound, srv.threads, PROTO_VERSION,
+		       proto_build_id(), opt.secret ? ", secret required" : "");
+	if (connect_to)
+		wk_log("dialling master %s, %d threads, protocol %u, %s%s", connect_to, srv.threads, PROTO_VERSION,
+		       proto_build_id(), opt.secret ? ", secret required" : "");
 
 	rc = wk_server_run(&srv) < 0 ? WK_EXIT_SOFTWARE : WK_EXIT_OK;
 	if (rc)
@@ -251,6 +279,7 @@ int main(int argc, char **argv)
 	signal(SIGINT, SIG_DFL);
 	wk_server_free(&srv);
 	free(opt.secret);
-	close(lfd);
+	if (lfd >= 0)
+		close(lfd);
 	return rc;
 }

@@ -66,7 +66,19 @@ void wk_server_forget(struct wk_server *srv, struct wk_conn *c, bool gone)
 		if (c->next)
 			c->next->prev = c->prev;
 		srv->n_conns--;
+		if (c->dialed && !srv->stop)
+			wk_dial_lost(srv, c->got_tile);
 	}
+}
+
+void wk_server_link(struct wk_server *srv, struct wk_conn *c)
+{
+	c->prev = NULL;
+	c->next = srv->conns;
+	if (srv->conns)
+		srv->conns->prev = c;
+	srv->conns = c;
+	srv->n_conns++;
 }
 
 bool wk_server_authed(struct wk_server *srv, struct wk_conn *c)
@@ -155,11 +167,7 @@ static int admit(struct wk_server *srv, int fd, const char *peer)
 		wk_log_limited(&srv->quiet_log, "%s: refused: %s", peer, why);
 		return evicted;
 	}
-	c->next = srv->conns;
-	if (srv->conns)
-		srv->conns->prev = c;
-	srv->conns = c;
-	srv->n_conns++;
+	wk_server_link(srv, c);
 	c->uprev = srv->unauth_tail;
 	*(srv->unauth_tail ? &srv->unauth_tail->unext : &srv->unauth_head) = c;
 	srv->unauth_tail = c;
@@ -289,8 +297,9 @@ int wk_server_init(struct wk_server *srv, struct wk_opts *opt, int lfd)
 	srv->opt = opt;
 	srv->lfd = lfd;
 	wk_cache_init(&srv->cache, opt->cache_bytes);
+	srv->dial.fd = -1;
 	srv->loop = ev_new();
-	if (!srv->loop || ev_io_set(srv->loop, lfd, POLLIN, on_accept, srv) < 0) {
+	if (!srv->loop || (lfd >= 0 && ev_io_set(srv->loop, lfd, POLLIN, on_accept, srv) < 0)) {
 		fprintf(stderr, "portray-worker: cannot set up the event loop: %s\n", strerror(errno));
 		ev_free(srv->loop);
 		return WK_EXIT_OSERR;
@@ -319,6 +328,8 @@ void wk_server_stop(struct wk_server *srv)
 
 void wk_server_free(struct wk_server *srv)
 {
+	srv->stop = 1; /* (also when the loop failed): closing connections dial nothing */
+	wk_dial_stop(srv);
 	wk_log("shutting down (%zu connections)", srv->n_conns);
 	for (struct wk_conn *c = srv->conns; c; c = c->next) {
 		if (c->state != ST_CLOSING) {

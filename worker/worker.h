@@ -43,6 +43,8 @@
  * unauthenticated budget over faster than a master's first frame arrives. */
 #define WK_EVICT_RATE 500.0
 #define WK_EVICT_BURST 64.0
+/* --connect: the longest pause between two attempts to reach the master */
+#define WK_DIAL_MAX_S 10.0
 /* default scene cache budget, MiB of encoded scene bytes */
 #define WK_CACHE_MB_DEFAULT 1024
 
