@@ -1,6 +1,7 @@
 # portray: one Makefile, no configure step.
 #   make              build bin/portray-master and bin/portray-worker
 #   make test         build and run every test (ends with "N passed, N failed, N skipped")
+#   make test-deploy  only the deployment tests (tests/deploy/*.sh: a real single-node Slurm)
 #   make bench        print speed and memory figures
 #   make fuzz         run the libFuzzer targets (clang)  FUZZ_SECONDS=600
 #   make install      PREFIX=/usr/local DESTDIR=
@@ -50,7 +51,7 @@ FUZZ_REPLAY:= $(patsubst tests/fuzz/%.c,$(BUILD)/tests/%-replay,$(FUZZ_SRC))
 BENCH_BIN  := $(patsubst bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 TOOLS_BIN  := $(patsubst tests/tools/%.c,$(BUILD)/tools/%,$(TOOLS_SRC))
 
-.PHONY: all test bench fuzz install uninstall clean
+.PHONY: all test test-deploy bench fuzz install uninstall clean
 # keep test and fuzz objects (chained pattern rules would delete them as intermediates)
 .SECONDARY:
 all: $(MASTER_BIN) $(WORKER_BIN)
@@ -99,6 +100,10 @@ $(BUILD)/tools/%: $(BUILD)/tests/tools/%.o $(LIBCORE)
 
 test: all $(UNIT_BIN) $(FUZZ_REPLAY) $(TOOLS_BIN)
 	@BUILD=$(BUILD) sh tests/run.sh
+
+# tests/deploy/*.sh through the same runner (they are part of make test too)
+test-deploy: all
+	@BUILD=$(BUILD) TEST_FILTER=deploy/ sh tests/run.sh
 
 bench: all $(BENCH_BIN) $(TOOLS_BIN)
 	@BUILD=$(BUILD) sh bench/run.sh

@@ -4,7 +4,8 @@
 #   unit tests      $BUILD/tests/test_*             (tests/unit/test_*.c)
 #   fuzz replays    $BUILD/tests/fuzz_*-replay over tests/fuzz/corpus/fuzz_*/
 #   error cases     tests/errors/*.sce: first line "// expect: LEVEL MESSAGE-SUBSTRING"
-#   scripts         tests/e2e/*.sh and tests/cli/*.sh
+#   scripts         tests/cli/*.sh, tests/e2e/*.sh and tests/deploy/*.sh (deploy:
+#                   a real Slurm; skipped when it is not installed)
 # Exit status of a test: 0 passed; 77 skipped (it could not check anything
 # here, e.g. a tool it needs is missing: the last line of its output says
 # why); anything else failed. Skips do not fail the run.
@@ -60,7 +61,7 @@ for e in tests/errors/*.sce; do
 	run "errors/$(basename "$e")" sh tests/check_error.sh "$e"
 done
 
-for s in tests/cli/*.sh tests/e2e/*.sh; do
+for s in tests/cli/*.sh tests/e2e/*.sh tests/deploy/*.sh; do
 	[ -f "$s" ] || continue
 	run "$(basename "$(dirname "$s")")/$(basename "$s")" env BUILD="$BUILD" sh "$s"
 done
