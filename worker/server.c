@@ -168,6 +168,7 @@ static int admit(struct wk_server *srv, int fd, const char *peer)
 		return evicted;
 	}
 	wk_server_link(srv, c);
+	wk_log_limited(&srv->quiet_log, "%s: connected", peer);
 	c->uprev = srv->unauth_tail;
 	*(srv->unauth_tail ? &srv->unauth_tail->unext : &srv->unauth_head) = c;
 	srv->unauth_tail = c;
