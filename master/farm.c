@@ -52,7 +52,7 @@ void farm_check_alive(struct farm *f)
 	if (f->lfd >= 0) {
 		/* workers may still dial in: wait for them */
 		if (!f->said_waiting)
-			farm_log(f, "no worker connected: waiting for workers to dial in on %s", f->o->accept);
+			farm_log(f, "no worker connected: waiting for workers to dial in on %s", f->accept_at);
 		f->said_waiting = true;
 		return;
 	}
@@ -143,8 +143,9 @@ static int start_accepting(struct farm *f)
 		fprintf(stderr, "portray-master: out of memory\n");
 		return -1;
 	}
+	snprintf(f->accept_at, sizeof f->accept_at, strchr(host, ':') ? "[%s]:%d" : "%s:%d", host, bound);
 	if (!f->o->quiet)
-		farm_log(f, "accepting workers on %s:%d", host, bound);
+		farm_log(f, "accepting workers on %s", f->accept_at);
 	return 0;
 }
 

@@ -13,6 +13,7 @@
 #include "master/sched.h"
 #include "master/workers.h"
 #include "proto/evloop.h"
+#include "proto/net.h"
 #include "proto/proto.h"
 
 /* reconnection attempts after a lost connection, with back-off 0.5 s, 1 s, 2 s ... */
@@ -107,6 +108,7 @@ struct farm {
 	struct worker *w;
 	uint32_t n_w, cap_w;    /* workers so far, and room (named + FARM_ACCEPT_MAX with --accept) */
 	int lfd;                /* --accept's listening socket, or -1 */
+	char accept_at[NET_HOST_LEN + NET_PORT_LEN + 4]; /* where it listens, the port as bound */
 	bool said_waiting;      /* "waiting for workers to dial in" printed */
 	const uint8_t *scene;   /* encoded scene */
 	size_t scene_len;
