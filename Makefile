@@ -129,7 +129,7 @@ MAN1       := docs/man/portray-master.1 docs/man/portray-worker.1
 MAN5       := docs/man/portray.5
 UNITS      := deploy/systemd/portray-worker.service deploy/systemd/portray-worker@.service
 DOCS       := README.md $(wildcard docs/*.md)
-DOCS_K8S   := $(wildcard deploy/k8s/*.yaml)
+DOCS_K8S   := $(wildcard deploy/k8s/*.yaml deploy/k8s/Dockerfile)
 DOCS_SLURM := $(wildcard deploy/slurm/*)
 
 install: all
