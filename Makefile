@@ -4,7 +4,8 @@
 #   make test-deploy  only the deployment tests (tests/deploy/*.sh: a real single-node Slurm)
 #   make bench        print speed and memory figures
 #   make fuzz         run the libFuzzer targets (clang)  FUZZ_SECONDS=600
-#   make install      PREFIX=/usr/local DESTDIR=
+#   make install      PREFIX=/usr/local DESTDIR=  (binaries, man pages, systemd units, docs)
+#   make uninstall    the same variables: removes exactly what install put there
 #   make SAN=address,undefined test   sanitizer build (objects under build/san)
 CC      ?= cc
 OPT     ?= -O3
@@ -14,6 +15,10 @@ CFLAGS  ?= $(OPT) -g
 ALL_CFLAGS = $(CSTD) $(WARN) $(CFLAGS) -I. -MMD -MP -pthread
 LDLIBS  := -lm -pthread
 PREFIX  ?= /usr/local
+BINDIR  ?= $(PREFIX)/bin
+MANDIR  ?= $(PREFIX)/share/man
+DOCDIR  ?= $(PREFIX)/share/doc/portray
+SYSTEMDDIR ?= $(PREFIX)/lib/systemd/system
 VERSION := 0.11.0
 
 ifdef SAN
@@ -123,12 +128,47 @@ fuzz:
 	    build/fuzz/corpus-$$n tests/fuzz/corpus/$$n 2>&1 | tail -n 5 || exit 1; \
 	done
 
+# What install puts where (uninstall removes the same list). The units name
+# the binaries by their installed path: @BINDIR@ becomes $(BINDIR).
+MAN1       := docs/man/portray-master.1 docs/man/portray-worker.1
+MAN5       := docs/man/portray.5
+UNITS      := deploy/systemd/portray-worker.service deploy/systemd/portray-worker@.service
+DOCS       := README.md $(wildcard docs/*.md)
+DOCS_K8S   := $(wildcard deploy/k8s/*.yaml deploy/k8s/Dockerfile)
+DOCS_SLURM := $(wildcard deploy/slurm/*)
+
 install: all
-	install -d $(DESTDIR)$(PREFIX)/bin
-	install -m 755 $(MASTER_BIN) $(WORKER_BIN) $(DESTDIR)$(PREFIX)/bin/
+	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(MANDIR)/man1 $(DESTDIR)$(MANDIR)/man5 \
+	  $(DESTDIR)$(SYSTEMDDIR) $(DESTDIR)$(DOCDIR)
+	install -m 755 $(MASTER_BIN) $(WORKER_BIN) $(DESTDIR)$(BINDIR)/
+	install -m 644 $(MAN1) $(DESTDIR)$(MANDIR)/man1/
+	install -m 644 $(MAN5) $(DESTDIR)$(MANDIR)/man5/
+	for u in $(UNITS); do \
+	  f="$(DESTDIR)$(SYSTEMDDIR)/$${u##*/}"; \
+	  sed 's|@BINDIR@|$(BINDIR)|g' "$$u" >"$$f" && chmod 644 "$$f" || exit 1; \
+	done
+	install -m 644 $(DOCS) $(DESTDIR)$(DOCDIR)/
+ifneq ($(DOCS_K8S),)
+	install -d $(DESTDIR)$(DOCDIR)/deploy/k8s
+	install -m 644 $(DOCS_K8S) $(DESTDIR)$(DOCDIR)/deploy/k8s/
+endif
+ifneq ($(DOCS_SLURM),)
+	install -d $(DESTDIR)$(DOCDIR)/deploy/slurm
+	install -m 644 $(DOCS_SLURM) $(DESTDIR)$(DOCDIR)/deploy/slurm/
+endif
 
 uninstall:
-	rm -f $(DESTDIR)$(PREFIX)/bin/portray-master $(DESTDIR)$(PREFIX)/bin/portray-worker
+	rm -f $(DESTDIR)$(BINDIR)/portray-master $(DESTDIR)$(BINDIR)/portray-worker
+	rm -f $(addprefix $(DESTDIR)$(MANDIR)/man1/,$(notdir $(MAN1)))
+	rm -f $(addprefix $(DESTDIR)$(MANDIR)/man5/,$(notdir $(MAN5)))
+	rm -f $(addprefix $(DESTDIR)$(SYSTEMDDIR)/,$(notdir $(UNITS)))
+	rm -f $(addprefix $(DESTDIR)$(DOCDIR)/,$(notdir $(DOCS)))
+	rm -f $(addprefix $(DESTDIR)$(DOCDIR)/deploy/k8s/,$(notdir $(DOCS_K8S)))
+	rm -f $(addprefix $(DESTDIR)$(DOCDIR)/deploy/slurm/,$(notdir $(DOCS_SLURM)))
+	for d in $(DESTDIR)$(DOCDIR)/deploy/k8s $(DESTDIR)$(DOCDIR)/deploy/slurm \
+	  $(DESTDIR)$(DOCDIR)/deploy $(DESTDIR)$(DOCDIR); do \
+	  if [ -d "$$d" ]; then rmdir "$$d" || true; fi; \
+	done
 
 clean:
 	rm -rf build bin
