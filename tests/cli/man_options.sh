@@ -17,9 +17,10 @@ page_text() {
 	sed -e 's/\\-/-/g' -e 's/\\f[BIRP]//g' -e 's/\\&//g' "$1"
 }
 
-# options PROGRAM: the long options its --help lists, one a line
+# options PROGRAM: the long options its --help lists (those that begin an
+# item: "  -x, --opt" or "      --opt", not ones named inside a description), one a line
 options() {
-	"$1" --help | grep -o -- '--[a-z][a-z-]*' | sort -u
+	"$1" --help | sed -n 's/^ *\(-[a-zA-Z], \)\{0,1\}\(--[a-z][a-z-]*\).*/\2/p' | sort -u
 }
 
 for prog in portray-master portray-worker; do
