@@ -52,7 +52,8 @@ void farm_check_alive(struct farm *f)
 	if (f->lfd >= 0) {
 		/* workers may still dial in: wait for them */
 		if (!f->said_waiting)
-			farm_log(f, "no worker connected: waiting for workers to dial in on %s", f->o->accept);
+			farm_log(f, "no worker connected: waiting for workers to dial in on %s (port %d)", f->o->accept,
+				 net_local_port(f->lfd)); /* --accept HOST:0 names no port */
 		f->said_waiting = true;
 		return;
 	}
