@@ -501,7 +501,15 @@ static void on_message(struct worker *w, const struct proto_msg *m)
 			worker_refuse(w, PERR_AUTH, "authentication failed: the worker's secret differs");
 			return;
 		}
-		set_state(w, W_OFFER, f->hb_timeout - (net_now() - w->offer_at));
+		/* the OFFER left with our proof: its deadline runs from then. A
+		 * proof read in the same round as its own (passed) deadline
+		 * leaves nothing, which set_state would take for no deadline */
+		double left = f->hb_timeout - (net_now() - w->offer_at);
+		if (left <= 0) {
+			worker_refuse(w, PERR_TIMEOUT, "%s not done within %.1f s", state_name(W_OFFER), f->hb_timeout);
+			return;
+		}
+		set_state(w, W_OFFER, left);
 		proto_conn_set_limit(w->pc, LIM_FRAME_PAYLOAD); /* tile results from now on */
 		return;
 	}

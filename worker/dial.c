@@ -60,9 +60,7 @@ static void on_dial_io(struct ev_loop *l, int fd, short revents, void *arg)
 		return;
 	}
 	c->dialed = true;
-	d->busy = true;
-	d->failures = 0;
-	d->delay = 0;
+	d->busy = true; /* the back-off stays until a job is served (wk_dial_lost) */
 	wk_server_link(srv, c);
 	wk_log("connected to master %s", peer);
 }
@@ -106,6 +104,7 @@ void wk_dial_lost(struct wk_server *srv, bool served)
 	d->busy = false;
 	if (served) {
 		d->delay = 0;
+		d->failures = 0;
 		ev_timer_arm(srv->loop, &d->t, net_now() + WK_DIAL_AGAIN_S);
 	} else {
 		dial_later(srv, "connection ended before a job");
