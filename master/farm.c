@@ -42,6 +42,29 @@ void farm_log(const struct farm *f, const char *fmt, ...)
 	va_end(ap);
 }
 
+void farm_log_limited(struct farm *f, const char *fmt, ...)
+{
+	double now = net_now();
+	if (now - f->log_since >= FARM_LOG_PERIOD_S) {
+		if (f->log_left_out)
+			farm_log(f, "(%u more lines about workers dialling in left out in %.0f s)", f->log_left_out,
+				 now - f->log_since);
+		f->log_since = now;
+		f->log_n = f->log_left_out = 0;
+	}
+	if (f->log_n >= FARM_LOG_BURST) {
+		f->log_left_out++;
+		return;
+	}
+	f->log_n++;
+	char line[1024];
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(line, sizeof line, fmt, ap);
+	va_end(ap);
+	farm_log(f, "%s", line);
+}
+
 void farm_check_alive(struct farm *f)
 {
 	if (!f->o->no_local)
@@ -62,24 +85,42 @@ void farm_check_alive(struct farm *f)
 
 /* ---- workers that dial in (--accept) ---- */
 
-/* A slot for a worker that dialled in: a new one, or one whose connection
- * never delivered anything (a flood of peers that do not finish their
- * handshake must not use up the room of real workers). */
+/*
+ * A slot for a worker that dialled in: a new one, or one whose connection
+ * never delivered anything. When FARM_ACCEPT_MAX are connected, the oldest
+ * one that has not passed its HELLO is evicted for the newcomer (as a worker
+ * does with its own unauthenticated peers), so a flood of idle connections
+ * cannot keep a real worker out: it sends its HELLO as soon as it is
+ * connected and is past the eviction order before many more arrive.
+ */
 static struct worker *accept_slot(struct farm *f)
 {
 	uint32_t live = 0;
-	struct worker *reuse = NULL;
+	struct worker *reuse = NULL, *victim = NULL;
 	for (uint32_t i = 0; i < f->n_w; i++) {
 		struct worker *w = &f->w[i];
 		if (!w->accepted)
 			continue;
-		if (w->state != W_IDLE)
+		if (w->state != W_IDLE) {
 			live++;
-		else if (!reuse && w->delivered == 0 && w->tiles_done == 0)
+			if (!w->spoke && (!victim || w->accepted_at < victim->accepted_at))
+				victim = w;
+		} else if (!reuse && w->delivered == 0 && w->tiles_done == 0) {
 			reuse = w;
+		}
 	}
-	if (live >= FARM_ACCEPT_MAX)
-		return NULL;
+	if (live >= FARM_ACCEPT_MAX) {
+		if (!victim)
+			return NULL;
+		if (victim->pc) {
+			proto_send_error(victim->pc, PERR_LIMIT, "evicted: too many connections dialling in");
+			proto_conn_flush(victim->pc);
+		}
+		worker_close(victim);
+		victim->dropped = true;
+		f->n_evicted++;
+		reuse = victim;
+	}
 	if (reuse) {
 		uint16_t index = reuse->index;
 		worker_free(reuse);
@@ -107,17 +148,16 @@ static void on_accept(struct ev_loop *l, int lfd, short revents, void *arg)
 		struct worker *w = atomic_load(sched_stop_flag(f->s)) ? NULL : accept_slot(f);
 		if (!w) {
 			close(fd);
-			farm_log(f, "worker %s refused: no room for more workers that dial in (%d at once)", peer,
-				 FARM_ACCEPT_MAX);
+			farm_log_limited(f, "worker %s refused: %d workers that dialled in are working already", peer,
+					 FARM_ACCEPT_MAX);
 			continue;
 		}
 		snprintf(w->addr.name, sizeof w->addr.name, "%s", peer);
-		snprintf(w->addr.host, sizeof w->addr.host, "%.*s", (int)(strrchr(peer, ':') - peer), peer);
+		const char *colon = strrchr(peer, ':');
+		snprintf(w->addr.host, sizeof w->addr.host, "%.*s", colon ? (int)(colon - peer) : (int)strlen(peer), peer);
 		w->name = w->addr.name;
-		if (!f->o->quiet)
-			farm_log(f, "worker %s dialled in", peer);
-		f->said_waiting = false;
-		worker_accepted(w, fd);
+		w->accepted_at = net_now();
+		worker_accepted(w, fd); /* "dialled in" is said once its HELLO passes */
 	}
 }
 
@@ -243,8 +283,13 @@ static void summary(struct farm *f)
 		st.audit_failed);
 	fprintf(stderr, "portray-master:   %-24s %6u tiles %5.1f%%\n", "local", st.local_done,
 		100.0 * st.local_done / st.n);
+	uint32_t silent = f->n_mute;
 	for (uint32_t i = 0; i < f->n_w; i++) {
 		struct worker *w = &f->w[i];
+		if (w->accepted && !w->spoke) { /* dialled in and said nothing valid: counted below */
+			silent += w->state != W_IDLE || !w->dropped;
+			continue;
+		}
 		fprintf(stderr,
 			"portray-master:   %-24s %6u tiles %5.1f%%  %u threads  window %u  rtt %.1f ms  sent %llu B "
 			"(scene %llu B, cache %s)  received %llu B%s%s\n",
@@ -255,6 +300,11 @@ static void summary(struct farm *f)
 	}
 	fprintf(stderr, "portray-master: farm: bytes sent %llu (scene %llu, encoded scene %zu B)\n",
 		(unsigned long long)sent, (unsigned long long)scene, f->scene_len);
+	if (silent || f->n_evicted)
+		fprintf(stderr,
+			"portray-master: farm: %u connections dialled in without a valid HELLO, %u more evicted to make "
+			"room\n",
+			silent, f->n_evicted);
 }
 
 /* ---- the loop ---- */

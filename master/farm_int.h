@@ -69,6 +69,8 @@ struct worker {
 	int retries;
 	bool dropped;           /* for good */
 	bool accepted;          /* it dialled in (--accept): lost is gone, never redialled */
+	double accepted_at;     /* when (the oldest unauthenticated one is evicted first) */
+	bool spoke;             /* its HELLO passed the check */
 	char why[300];          /* why it was last lost or dropped */
 	uint8_t nonce[PROTO_NONCE_BYTES], peer_nonce[PROTO_NONCE_BYTES];
 	uint32_t threads;
@@ -110,6 +112,10 @@ struct farm {
 	int lfd;                /* --accept's listening socket, or -1 */
 	char accept_at[NET_HOST_LEN + NET_PORT_LEN + 4]; /* where it listens, the port as bound */
 	bool said_waiting;      /* "waiting for workers to dial in" printed */
+	uint32_t n_evicted;     /* dialled in, evicted unauthenticated to make room */
+	uint32_t n_mute;        /* dialled in, gone before a valid HELLO (not logged one by one) */
+	double log_since;       /* farm_log_limited's period, and its counts */
+	uint32_t log_n, log_left_out;
 	const uint8_t *scene;   /* encoded scene */
 	size_t scene_len;
 	uint8_t hash[PROTO_HASH_BYTES];
@@ -128,6 +134,11 @@ struct farm {
 
 /* farm.c */
 void farm_log(const struct farm *f, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* farm_log for lines a flood of peers dialling in could repeat: at most
+ * FARM_LOG_BURST per FARM_LOG_PERIOD_S, the rest counted. */
+#define FARM_LOG_BURST 20
+#define FARM_LOG_PERIOD_S 10.0
+void farm_log_limited(struct farm *f, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* Whether the render can go on: ends the loop (rc EXIT_NO_WORKERS) when
  * --no-local and no worker is left. */
 void farm_check_alive(struct farm *f);

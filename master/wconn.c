@@ -195,9 +195,13 @@ static void worker_lost(struct worker *w, bool fatal, const char *fmt, ...)
 	va_end(ap);
 	worker_close(w);
 	if (w->accepted) {
-		/* it dialled us: it may dial again (as a new worker), we cannot */
+		/* it dialled us: it may dial again (as a new worker), we cannot;
+		 * peers that never said a valid HELLO are only counted */
 		w->dropped = true;
-		farm_log(f, "worker %s gone: %s", w->name, w->why);
+		if (w->spoke)
+			farm_log_limited(f, "worker %s gone: %s", w->name, w->why);
+		else
+			f->n_mute++;
 	} else if (!fatal && w->retries < FARM_MAX_RETRIES && !atomic_load(sched_stop_flag(f->s))) {
 		w->retry_at = net_now() + FARM_BACKOFF_S * pow(2, w->retries);
 		w->retries++;
@@ -450,6 +454,7 @@ static void on_hello(struct worker *w, const struct proto_msg *m)
 {
 	struct farm *f = w->f;
 	char why[LIM_ERROR_TEXT + 1];
+	w->spoke = true; /* a HELLO, good or not: its fate is worth a line, and it is no idle peer */
 	int code = proto_hello_check(m, ROLE_WORKER, f->secret != NULL, PROTO_VERSION, why, sizeof why);
 	if (code) {
 		worker_refuse(w, code, "%s", why);
@@ -457,6 +462,8 @@ static void on_hello(struct worker *w, const struct proto_msg *m)
 	}
 	memcpy(w->peer_nonce, m->u.hello.nonce, PROTO_NONCE_BYTES);
 	w->threads = m->u.hello.threads ? m->u.hello.threads : 1;
+	if (w->accepted && !f->o->quiet)
+		farm_log_limited(f, "worker %s dialled in (%u threads)", w->name, w->threads);
 	size_window(w);
 	if (f->secret) {
 		uint8_t mac[PROTO_MAC_BYTES];

@@ -24,4 +24,25 @@ timeout 60 "$BIN/portray-master" "$SCENE" --size 64x48 -o "$T/farm2.ppm" --no-lo
 cmp "$T/local.ppm" "$T/farm2.ppm" || fail "second image differs"
 kill -0 "$w_PID" || fail "the worker died under the flood"
 echo "$(grep -c 'again in' "$T/hold.log") connections reopened by the holder meanwhile"
+
+
+# the same against a master taking workers that dial in (--accept): idle
+# connections fill its room for them, the oldest silent one is evicted for
+# each newcomer, and a real worker dialling in renders the image
+P=$(free_port)
+"$BIN/portray-master" "$SCENE" --size 64x48 -o "$T/farm3.ppm" --no-local --secret-file "$T/secret" \
+	--accept "127.0.0.1:$P" --heartbeat-timeout 30 2>"$T/m3.log" &
+M=$!
+PIDS="$PIDS $M"
+wait_for "$T/m3.log" "accepting workers" "the master to accept"
+"$TOOLS/fakepeer" hold --to "127.0.0.1:$P" --count 300 2>"$T/hold3.log" &
+PIDS="$PIDS $!"
+wait_for "$T/hold3.log" "again in" "the master to evict idle connections" 30
+start_dialer real "127.0.0.1:$P" -j 1 --secret-file "$T/secret"
+timeout 60 sh -c "wait $M" 2>/dev/null
+wait $M || fail "the master taking dial-ins could not render past 300 idle connections (exit $?)"
+cmp "$T/local.ppm" "$T/farm3.ppm" || fail "image differs (--accept)"
+grep -q "evicted to make room" "$T/m3.log" || fail "the master did not say it evicted idle connections"
+[ "$(wc -l <"$T/m3.log")" -lt 200 ] || fail "the master's log grew to $(wc -l <"$T/m3.log") lines under the flood"
+echo "ok   --accept: $(grep 'evicted to make room' "$T/m3.log" | sed 's/^portray-master: farm: //')"
 echo ok
