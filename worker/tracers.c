@@ -142,7 +142,7 @@ static struct wk_job *pick_job(struct wk_tracers *t)
 		struct wk_job *j = t->jobs[i];
 		if (!j->ready || j->failed || j->head == j->len || atomic_load(&j->cancel))
 			continue;
-		if (j->traced_bytes + j->outq_bytes > PROTO_OUT_HIGH_WATER) {
+		if (j->done_bytes + j->outq_bytes > PROTO_OUT_HIGH_WATER) {
 			j->paused = true;
 			continue;
 		}
@@ -211,6 +211,7 @@ static void tr_done(void *ctx, const struct tile_work *w, uint8_t **rgb, int ok)
 	if (r && !atomic_load(&j->cancel)) {
 		r->pixels = *rgb; /* the tile's reference moves to the result */
 		*rgb = NULL;
+		j->done_bytes += n;
 		if (t->results_tail)
 			t->results_tail->next = r;
 		else
@@ -323,8 +324,10 @@ void wk_result_release(struct wk_tracers *t, struct wk_result *r, size_t outq)
 {
 	struct wk_job *j = r->job;
 	pthread_mutex_lock(&t->mu);
-	if (r->pixels)
+	if (r->pixels) {
 		j->traced_bytes -= tile_bytes(&r->tile);
+		j->done_bytes -= tile_bytes(&r->tile);
+	}
 	if (outq != SIZE_MAX)
 		j->outq_bytes = outq;
 	bool end = job_unref_locked(t, j);
@@ -443,7 +446,7 @@ void wk_job_set_outq(struct wk_tracers *t, struct wk_job *j, size_t q)
 {
 	pthread_mutex_lock(&t->mu);
 	j->outq_bytes = q;
-	if (j->paused && j->traced_bytes + q <= PROTO_OUT_HIGH_WATER) {
+	if (j->paused && j->done_bytes + q <= PROTO_OUT_HIGH_WATER) {
 		j->paused = false;
 		pthread_cond_broadcast(&t->cv);
 	}

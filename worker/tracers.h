@@ -59,6 +59,9 @@ struct wk_job {
 	int refs;                /* the owner + tiles taken + results not yet released */
 	uint32_t running;        /* tiles being traced */
 	size_t traced_bytes;     /* result bytes taken by tracers and not yet queued on the socket */
+	size_t done_bytes;       /* of those, traced and waiting for the loop (back-pressure counts
+				  * these and the socket's queue, not tiles being traced: at most
+				  * one per tracer, so large tiles still use every thread) */
 	size_t outq_bytes;       /* the socket's output queue at the loop's last look */
 	bool ready;              /* its scene is built: tracers may take its tiles */
 	bool paused;             /* skipped for back-pressure: wake the tracers when it has room */
