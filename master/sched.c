@@ -36,6 +36,8 @@ struct sched {
 	struct ftile *t;
 	uint32_t *queue;       /* pending tile ids: ring of n */
 	uint32_t q_head, q_len;
+	uint32_t *order;       /* tiles handed out, sorted by (sent, id): the tail's duplicates */
+	uint32_t n_order, order_head; /* order[0..order_head) are done (distrust resets it) */
 	uint32_t *audits;      /* tile ids with a claim to re-render: ring of n */
 	uint32_t a_head, a_len;
 	struct trust *trust;   /* per worker */
@@ -94,9 +96,10 @@ struct sched *sched_new(const struct tiling *tg, uint32_t n_workers, uint8_t *im
 	uint32_t n = tg->n;
 	s->t = calloc(n, sizeof *s->t);
 	s->queue = calloc(n, sizeof *s->queue);
+	s->order = calloc(n, sizeof *s->order);
 	s->audits = calloc(n, sizeof *s->audits);
 	s->trust = calloc(n_workers ? n_workers : 1, sizeof *s->trust);
-	if (!s->t || !s->queue || !s->audits || !s->trust) {
+	if (!s->t || !s->queue || !s->order || !s->audits || !s->trust) {
 		sched_free(s);
 		return NULL;
 	}
@@ -127,6 +130,7 @@ void sched_free(struct sched *s)
 	pthread_cond_destroy(&s->cv);
 	free(s->t);
 	free(s->queue);
+	free(s->order);
 	free(s->audits);
 	free(s->trust);
 	free(s);
@@ -135,6 +139,22 @@ void sched_free(struct sched *s)
 struct tile_rect sched_rect(const struct sched *s, uint32_t id) { return tiling_rect(&s->tg, id); }
 
 /* ---- the queue ---- */
+
+/* Files tile id, handed out for the first time, into the order of hand-out
+ * times (from the end: times come nearly in order). */
+static void order_add(struct sched *s, uint32_t id)
+{
+	const struct ftile *t = &s->t[id];
+	uint32_t k = s->n_order++;
+	while (k > s->order_head) {
+		const struct ftile *p = &s->t[s->order[k - 1]];
+		if (p->sent < t->sent || (p->sent == t->sent && s->order[k - 1] < id))
+			break;
+		s->order[k] = s->order[k - 1];
+		k--;
+	}
+	s->order[k] = id;
+}
 
 static uint32_t take_locked(struct sched *s, uint16_t who, bool dup_ok, double now)
 {
@@ -151,26 +171,28 @@ static uint32_t take_locked(struct sched *s, uint16_t who, bool dup_ok, double n
 		} else {
 			t->taken = 1;
 			t->sent = now;
+			order_add(s, id);
 		}
 		holder_add(t, who);
 		return id;
 	}
 	if (!dup_ok)
 		return SCHED_NO_TILE;
-	/* the tail: the oldest tile that one other taker holds */
-	uint32_t best = SCHED_NO_TILE;
-	for (uint32_t i = 0; i < s->tg.n; i++) {
-		struct ftile *t = &s->t[i];
+	/* the tail: the oldest tile that one other taker holds. Done tiles at
+	 * the front of the order are passed for good, so the search costs the
+	 * outstanding tiles, not the image's */
+	while (s->order_head < s->n_order && s->t[s->order[s->order_head]].done)
+		s->order_head++;
+	for (uint32_t k = s->order_head; k < s->n_order; k++) {
+		uint32_t id = s->order[k];
+		struct ftile *t = &s->t[id];
 		if (t->done || t->claim || holder_count(t) != 1 || holds(t, who))
 			continue;
-		if (best == SCHED_NO_TILE || t->sent < s->t[best].sent)
-			best = i;
-	}
-	if (best != SCHED_NO_TILE) {
-		holder_add(&s->t[best], who);
+		holder_add(t, who);
 		s->st.duplicates++;
+		return id;
 	}
-	return best;
+	return SCHED_NO_TILE;
 }
 
 /* Back to the front of the queue when not done, unheld, with no claim
@@ -212,6 +234,7 @@ static void distrust_locked(struct sched *s, uint16_t who, uint32_t tile)
 		return;
 	struct sched_trust *tr = &s->trust[who].t;
 	tr->caught = true;
+	s->order_head = 0; /* tiles it delivered come undone, wherever they are in the order */
 	tr->tile = tile;
 	tr->requeued = 1; /* the tile whose audit failed: the audit's pixels replace it */
 	for (uint32_t i = 0; i < s->tg.n; i++) {
