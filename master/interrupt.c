@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <termios.h>
+#include <time.h>
 #include <unistd.h>
 
 /* How long the key thread waits in poll before checking whether to stop. */
@@ -64,24 +65,33 @@ static void term_raw(void)
 static void at_exit_restore(void) { term_restore(); }
 
 /* who to tell when *g_cancel is set (interrupt_on_cancel); called from a
- * signal handler: must be async-signal-safe (ev_wake is one write) */
-static void (*volatile g_wake)(void *);
-static void *volatile g_wake_arg;
+ * signal handler or the key thread: must be async-signal-safe (ev_wake is
+ * one write). g_wake_busy counts calls under way, so that replacing the
+ * callback waits for them: the caller may free what arg points to next. */
+static _Atomic(void (*)(void *)) g_wake;
+static _Atomic(void *) g_wake_arg;
+static atomic_int g_wake_busy;
 
 static void cancelled(void)
 {
 	int e = errno;
-	void (*fn)(void *) = g_wake;
+	atomic_fetch_add(&g_wake_busy, 1);
+	void (*fn)(void *) = atomic_load(&g_wake);
 	if (fn)
-		fn(g_wake_arg);
+		fn(atomic_load(&g_wake_arg));
+	atomic_fetch_sub(&g_wake_busy, 1);
 	errno = e;
 }
 
 void interrupt_on_cancel(void (*fn)(void *), void *arg)
 {
-	g_wake = NULL;
-	g_wake_arg = arg;
-	g_wake = fn;
+	atomic_store(&g_wake, NULL);
+	while (atomic_load(&g_wake_busy) > 0) { /* a call with the old callback is under way */
+		struct timespec ts = { 0, 100000 };
+		nanosleep(&ts, NULL);
+	}
+	atomic_store(&g_wake_arg, arg);
+	atomic_store(&g_wake, fn);
 }
 
 static void on_sigint(int sig)

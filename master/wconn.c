@@ -443,8 +443,10 @@ static void on_result(struct worker *w, const struct proto_msg *m)
 	if (sched_result(f->s, t->id, w->index, m->u.result.pixels, audit, &other) == SCHED_USED) {
 		w->tiles_done++;
 		w->delivered++;
-		if (other < f->n_w && f->w[other].state == W_READY)
+		if (other < f->n_w && f->w[other].state == W_READY) {
 			cancel_on(&f->w[other], t->id);
+			worker_dispatch(&f->w[other]); /* its window has room again */
+		}
 	}
 }
 
