@@ -1296,8 +1296,15 @@ int img_output_check(const char *path, char *dir, size_t dir_len)
 		errno = EINVAL;
 		return -1;
 	}
-	if (strcmp(path, "-") == 0)
-		return 0;
+	if (strcmp(path, "-") == 0) {
+		/* standard output: open, and not for reading only */
+		int fl = fcntl(STDOUT_FILENO, F_GETFL);
+		if (fl >= 0 && (fl & O_ACCMODE) != O_RDONLY)
+			return 0;
+		snprintf(dir, dir_len, "standard output");
+		errno = fl < 0 ? EBADF : EACCES;
+		return -1;
+	}
 	/* the file img_write_opts would touch: a link's target */
 	struct stat st;
 	char *real = NULL;

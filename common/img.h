@@ -96,7 +96,8 @@ int img_write_opts(const char *path, const struct img_desc *d);
 
 /*
  * Checks, before any work is done, that img_write_opts could write path:
- * "-" always passes; a directory fails (EISDIR); an existing file that is
+ * "-" passes when standard output is open for writing (else EBADF, or
+ * EACCES when open for reading only); a directory fails (EISDIR); an existing file that is
  * not a regular one (device, FIFO) must be writable (access W_OK); for any
  * other name a temporary file is created and removed in the directory the
  * image would go to (that of a symbolic link's target), which catches a

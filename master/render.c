@@ -112,6 +112,8 @@ static int output_plan(const struct master_opts *o, const char **out, char **out
 			fprintf(stderr, "portray-master: cannot write %s: it is a directory\n", *out);
 		else if (e == ENOTDIR)
 			fprintf(stderr, "portray-master: cannot write %s: %s is not a directory\n", *out, dir);
+		else if (to_stdout)
+			fprintf(stderr, "portray-master: cannot write standard output: %s\n", strerror(e));
 		else
 			fprintf(stderr, "portray-master: cannot write %s: %s: %s\n", *out, dir, strerror(e));
 		return EXIT_IO;

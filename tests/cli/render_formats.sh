@@ -155,6 +155,16 @@ refused 64 'does not go with the name' -o "$TMP/x.png" --format exr
 refused 64 'does not go with the name' -o "$TMP/x.exr" --format pfm
 refused 64 "--format wants png, png16, ppm, pfm, exr or exr-half, not 'tiff'" -o "$TMP/x.png" --format tiff
 refused 74 'no directory' --format exr -o "$TMP/none/x.data"
+# standard output closed, or a terminal (script(1) gives one, where present)
+timeout -k 1 5 "$MASTER" -q "$HOSTILE" -o - >&- 2>"$TMP/err"
+rc=$?
+[ "$rc" -eq 74 ] || fail "-o - with stdout closed: exit $rc, want 74"
+grep -q 'cannot write standard output: Bad file descriptor' "$TMP/err" || fail "closed stdout: $(cat "$TMP/err")"
+if command -v script >/dev/null 2>&1; then
+	timeout -k 1 5 script -qec "'$MASTER' -q '$HOSTILE' -o -; echo exit=\$?" /dev/null </dev/null >"$TMP/tty" 2>&1
+	grep -q 'exit=64' "$TMP/tty" || fail "-o - on a terminal: $(cat "$TMP/tty")"
+	grep -q 'would write a binary image to the terminal' "$TMP/tty" || fail "-o - on a terminal: $(cat "$TMP/tty")"
+fi
 # a directory that refuses files; root passes any mode bits, so as root the
 # master runs as nobody (setpriv) if it can, and the check is skipped if not
 mkdir "$TMP/ro" && chmod 555 "$TMP/ro"

@@ -819,6 +819,19 @@ static void test_output_check(void)
 	}
 	char path[400], got[400];
 	CHECK(img_output_check("-", got, sizeof got) == 0);
+	/* standard output closed, or open for reading only: refused */
+	pid_t pid = fork();
+	if (pid == 0) {
+		close(STDOUT_FILENO);
+		int closed = img_output_check("-", NULL, 0) == -1 && errno == EBADF;
+		int fd = open("/dev/null", O_RDONLY); /* takes descriptor 1 */
+		int rdonly = fd == STDOUT_FILENO && img_output_check("-", got, sizeof got) == -1 && errno == EACCES &&
+			     strcmp(got, "standard output") == 0;
+		_exit(closed && rdonly ? 0 : 1);
+	}
+	int st = -1;
+	waitpid(pid, &st, 0);
+	CHECK(WIFEXITED(st) && WEXITSTATUS(st) == 0);
 	snprintf(path, sizeof path, "%s/new.png", dir);
 	CHECK(img_output_check(path, got, sizeof got) == 0);
 	CHECK(count_entries(dir) == 0); /* the probe is gone */
