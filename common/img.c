@@ -1,10 +1,13 @@
 /*
- * img.c - image files: PNG (RGB8, with an in-tree deflate) and binary PPM.
+ * img.c - image files: PNG (8 or 16 bits, with an in-tree deflate), binary
+ * PPM, and writing any format to a file or standard output (the float
+ * formats, PFM and OpenEXR, are in img_float.c).
  *
  * PNG encoder:
  *   - Filters: each row takes the filter (None, Sub, Up, Average, Paeth) whose
  *     output has the smallest sum of absolute values (bytes read as signed),
- *     the heuristic the PNG specification recommends for true-colour images.
+ *     the heuristic the PNG specification recommends for true-colour images
+ *     (16-bit rows are filtered as bytes too, a pixel being 6 of them).
  *   - Deflate (RFC 1951): LZ77 over a 32 KiB window with hash chains on three
  *     bytes and one-step lazy matching (parameters close to zlib's level 6:
  *     chains of up to 128, 32 when a good match is in hand, stop at 128).
@@ -15,8 +18,12 @@
  *     least two symbols, so all codes are complete.
  *   - zlib wrapper (RFC 1950) with Adler-32; chunks with CRC-32; the IDAT
  *     data is split into chunks of at most 1 MiB.
+ *   - img_write_opts adds cHRM, gAMA, sRGB, sBIT (16-bit from 8-bit values)
+ *     and tEXt chunks between IHDR and IDAT; the IDAT data is the same with
+ *     or without them.
  * img_write picks the format by the name: ".png" in any case gives PNG and
- * every other name (".ppm", or anything else) binary PPM (P6, maxval 255).
+ * every other name (".ppm", or anything else) binary PPM (P6, maxval 255);
+ * img_write_opts writes the format it is given.
  */
 #include "common/img.h"
 
@@ -31,6 +38,7 @@
 #include <unistd.h>
 
 #include "common/crc32.h"
+#include "common/img_int.h"
 #include "common/limits.h"
 
 /* ---- tables ---------------------------------------------------------------- */
@@ -600,22 +608,72 @@ static inline uint8_t paeth(uint8_t a, uint8_t b, uint8_t c)
 }
 
 /*
- * Filters the rows of rgb into out (h rows of 1 + 3w bytes), each row with
- * the filter of least sum of |signed byte|. scratch holds 5 rows of 3w bytes.
+ * Where the PNG's rows come from: the caller's RGB8 rows as they are, or
+ * rows converted into buf[y & 1] (so row y - 1 stays valid while row y is
+ * made): 8-bit from floats, 16-bit (big-endian samples) from either.
  */
-static void png_filter(const uint8_t *rgb, uint32_t w, uint32_t h, uint8_t *out, uint8_t *scratch)
+struct png_rows {
+	const struct img_desc *d;
+	int depth16;
+	size_t rb; /* bytes per row: 3w or 6w */
+	uint8_t *buf[2];
+};
+
+/* The renderer's own rounding (filter_quantise): clamp to [0,1], then the
+ * nearest of 2^bits - 1 steps; NaN counts as 0. */
+static inline unsigned quantise(float c, double top)
 {
-	size_t rb = 3 * (size_t)w;
+	double v = c > 0 ? (c < 1 ? c : 1) : 0;
+	return (unsigned)(v * top + 0.5);
+}
+
+static const uint8_t *png_row(struct png_rows *r, uint32_t y)
+{
+	const struct img_desc *d = r->d;
+	size_t n = 3 * (size_t)d->w;
+	if (d->type == IMG_RGB8 && !r->depth16)
+		return (const uint8_t *)d->pixels + y * n;
+	uint8_t *o = r->buf[y & 1];
+	if (d->type == IMG_RGB8) {
+		/* v * 257 = v in both bytes: the exact 8-to-16-bit scaling (PNG's
+		 * left bit replication; sBIT tells a decoder the high byte is it) */
+		const uint8_t *p = (const uint8_t *)d->pixels + y * n;
+		for (size_t i = 0; i < n; i++)
+			o[2 * i] = o[2 * i + 1] = p[i];
+	} else if (!r->depth16) {
+		const float *p = (const float *)d->pixels + y * n;
+		for (size_t i = 0; i < n; i++)
+			o[i] = (uint8_t)quantise(p[i], 255.0);
+	} else {
+		const float *p = (const float *)d->pixels + y * n;
+		for (size_t i = 0; i < n; i++) {
+			unsigned v = quantise(p[i], 65535.0);
+			o[2 * i] = (uint8_t)(v >> 8);
+			o[2 * i + 1] = (uint8_t)v;
+		}
+	}
+	return o;
+}
+
+/*
+ * Filters the h rows into out (h rows of 1 + rb bytes), each row with the
+ * filter of least sum of |signed byte|; bpp is the bytes of one pixel (3 for
+ * 8-bit RGB, 6 for 16-bit). scratch holds 5 rows of rb bytes.
+ */
+static void png_filter(struct png_rows *r, uint32_t h, int bpp, uint8_t *out, uint8_t *scratch)
+{
+	size_t rb = r->rb, k = (size_t)bpp;
+	const uint8_t *up = NULL;
 	for (uint32_t y = 0; y < h; y++) {
-		const uint8_t *cur = rgb + y * rb, *up = y ? cur - rb : NULL;
+		const uint8_t *cur = png_row(r, y);
 		uint64_t best_sum = UINT64_MAX;
 		int best = 0;
 		for (int f = 0; f < 5; f++) {
 			uint8_t *d = scratch + (size_t)f * rb;
 			uint64_t sum = 0;
 			for (size_t i = 0; i < rb; i++) {
-				uint8_t a = i >= 3 ? cur[i - 3] : 0, b = up ? up[i] : 0;
-				uint8_t c = i >= 3 && up ? up[i - 3] : 0, v;
+				uint8_t a = i >= k ? cur[i - k] : 0, b = up ? up[i] : 0;
+				uint8_t c = i >= k && up ? up[i - k] : 0, v;
 				switch (f) {
 				case 0: v = cur[i]; break;
 				case 1: v = (uint8_t)(cur[i] - a); break;
@@ -634,6 +692,7 @@ static void png_filter(const uint8_t *rgb, uint32_t w, uint32_t h, uint8_t *out,
 		uint8_t *o = out + y * (rb + 1);
 		o[0] = (uint8_t)best;
 		memcpy(o + 1, scratch + (size_t)best * rb, rb);
+		up = cur;
 	}
 }
 
@@ -647,6 +706,46 @@ static void png_chunk(struct obuf *o, const char *type, const uint8_t *data, siz
 	ob_be32(o, crc32_update(crc, data, n));
 }
 
+static void put_be32(uint8_t *p, uint32_t v)
+{
+	p[0] = (uint8_t)(v >> 24);
+	p[1] = (uint8_t)(v >> 16);
+	p[2] = (uint8_t)(v >> 8);
+	p[3] = (uint8_t)v;
+}
+
+/*
+ * The chunks between IHDR and IDAT (docs/camera.md, "Output formats"):
+ * the values are sRGB-encoded, so sRGB (rendering intent 0, perceptual),
+ * with the gAMA (1/2.2 as 45455) and cHRM (Rec. 709 primaries, D65 white,
+ * times 100000) that the PNG specification asks to go with it for
+ * decoders that know no sRGB; sBIT 8 8 8 when 16-bit samples come from
+ * 8-bit values; a tEXt chunk per text item.
+ */
+static void png_meta_chunks(struct obuf *o, const struct img_desc *d, int depth16)
+{
+	static const uint32_t chrm[8] = { 31270, 32900, 64000, 33000, 30000, 60000, 15000, 6000 };
+	uint8_t b[32];
+	for (int i = 0; i < 8; i++)
+		put_be32(b + 4 * i, chrm[i]);
+	png_chunk(o, "cHRM", b, 32);
+	put_be32(b, 45455);
+	png_chunk(o, "gAMA", b, 4);
+	b[0] = 0;
+	png_chunk(o, "sRGB", b, 1);
+	if (depth16 && d->type == IMG_RGB8) {
+		b[0] = b[1] = b[2] = 8;
+		png_chunk(o, "sBIT", b, 3);
+	}
+	for (size_t i = 0; i < d->n_text; i++) {
+		char text[IMG_TEXT_KEY_MAX + 1 + IMG_TEXT_VALUE_MAX + 1];
+		size_t kn = strlen(d->text[i].key);
+		memcpy(text, d->text[i].key, kn + 1); /* keyword, NUL separator */
+		size_t vn = img_text_clean(d->text[i].value, text + kn + 1);
+		png_chunk(o, "tEXt", (const uint8_t *)text, kn + 1 + vn);
+	}
+}
+
 static int img_size_ok(uint32_t w, uint32_t h)
 {
 	return w > 0 && h > 0 && w <= LIM_IMAGE_SIDE && h <= LIM_IMAGE_SIDE &&
@@ -654,25 +753,30 @@ static int img_size_ok(uint32_t w, uint32_t h)
 }
 
 /*
- * Encodes w*h RGB8 pixels (rows top to bottom) as a PNG in memory. On success
- * *out is malloc'd (the caller frees it) and 0 is returned; on failure -1
- * with errno EINVAL (size outside LIM_IMAGE_*) or ENOMEM.
+ * Encodes d (validated; format IMG_PNG or IMG_PNG16) as a PNG in memory.
+ * plain: no chunk but IHDR, IDAT and IEND (img_png_encode's PNG). 0 with
+ * *out malloc'd (the caller frees it), or -1 with errno ENOMEM.
  */
-int img_png_encode(const uint8_t *rgb, uint32_t w, uint32_t h, uint8_t **out, size_t *out_len)
+static int png_encode(const struct img_desc *d, int plain, uint8_t **out, size_t *out_len)
 {
 	*out = NULL;
 	*out_len = 0;
-	if (!img_size_ok(w, h) || !rgb) {
-		errno = EINVAL;
-		return -1;
-	}
 	pthread_once(&tables_once, tables_init);
-	size_t rb = 3 * (size_t)w, raw_n = (rb + 1) * h;
+	uint32_t w = d->w, h = d->h;
+	int depth16 = d->format == IMG_PNG16, bpp = depth16 ? 6 : 3;
+	struct png_rows rows = { .d = d, .depth16 = depth16, .rb = (size_t)bpp * w };
+	size_t rb = rows.rb, raw_n = (rb + 1) * h;
 	uint8_t *filtered = malloc(raw_n), *scratch = malloc(5 * rb);
 	struct obuf zs = { 0 }, png = { 0 };
 	if (!filtered || !scratch)
 		goto oom;
-	png_filter(rgb, w, h, filtered, scratch);
+	if (depth16 || d->type != IMG_RGB8) {
+		rows.buf[0] = malloc(rb);
+		rows.buf[1] = malloc(rb);
+		if (!rows.buf[0] || !rows.buf[1])
+			goto oom;
+	}
+	png_filter(&rows, h, bpp, filtered, scratch);
 	free(scratch);
 	scratch = NULL;
 
@@ -691,12 +795,16 @@ int img_png_encode(const uint8_t *rgb, uint32_t w, uint32_t h, uint8_t **out, si
 		goto oom;
 
 	static const uint8_t sig[8] = { 0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n' };
-	ob_reserve(&png, zs.n + zs.n / 65536 * 12 + 128);
+	ob_reserve(&png, zs.n + zs.n / 65536 * 12 + 1024);
 	ob_bytes(&png, sig, 8);
-	uint8_t ihdr[13] = { (uint8_t)(w >> 24), (uint8_t)(w >> 16), (uint8_t)(w >> 8), (uint8_t)w,
-			     (uint8_t)(h >> 24), (uint8_t)(h >> 16), (uint8_t)(h >> 8), (uint8_t)h,
-			     8, 2, 0, 0, 0 }; /* 8 bits, RGB, deflate, adaptive filters, no interlace */
+	uint8_t ihdr[13] = { 0 };
+	put_be32(ihdr, w);
+	put_be32(ihdr + 4, h);
+	ihdr[8] = depth16 ? 16 : 8; /* bits per sample */
+	ihdr[9] = 2;                /* RGB; deflate, adaptive filters, no interlace: 0 0 0 */
 	png_chunk(&png, "IHDR", ihdr, sizeof ihdr);
+	if (!plain)
+		png_meta_chunks(&png, d, depth16);
 	const size_t idat_max = 1u << 20;
 	for (size_t off = 0; off < zs.n; off += idat_max)
 		png_chunk(&png, "IDAT", zs.p + off, zs.n - off < idat_max ? zs.n - off : idat_max);
@@ -705,19 +813,164 @@ int img_png_encode(const uint8_t *rgb, uint32_t w, uint32_t h, uint8_t **out, si
 	zs.p = NULL;
 	if (png.oom)
 		goto oom;
+	free(rows.buf[0]);
+	free(rows.buf[1]);
 	*out = png.p;
 	*out_len = png.n;
 	return 0;
 oom:
 	free(filtered);
 	free(scratch);
+	free(rows.buf[0]);
+	free(rows.buf[1]);
 	free(zs.p);
 	free(png.p);
 	errno = ENOMEM;
 	return -1;
 }
 
-/* ---- files ----------------------------------------------------------------------- */
+/*
+ * Encodes w*h RGB8 pixels (rows top to bottom) as a PNG in memory, with no
+ * chunk but IHDR, IDAT and IEND. On success *out is malloc'd (the caller
+ * frees it) and 0 is returned; on failure -1 with errno EINVAL (size
+ * outside LIM_IMAGE_*) or ENOMEM.
+ */
+int img_png_encode(const uint8_t *rgb, uint32_t w, uint32_t h, uint8_t **out, size_t *out_len)
+{
+	*out = NULL;
+	*out_len = 0;
+	if (!img_size_ok(w, h) || !rgb) {
+		errno = EINVAL;
+		return -1;
+	}
+	struct img_desc d = { .w = w, .h = h, .type = IMG_RGB8, .pixels = rgb, .format = IMG_PNG };
+	return png_encode(&d, 1, out, out_len);
+}
+
+/* ---- formats, text, sinks ---------------------------------------------------------- */
+
+static const struct {
+	const char *name, *ext;
+} formats[IMG_N_FORMATS] = {
+	[IMG_PNG] = { "png", ".png" }, [IMG_PNG16] = { "png16", ".png" }, [IMG_PPM] = { "ppm", ".ppm" },
+	[IMG_PFM] = { "pfm", ".pfm" }, [IMG_EXR] = { "exr", ".exr" },     [IMG_EXR_HALF] = { "exr-half", ".exr" },
+};
+
+int img_format_parse(const char *name, enum img_format *f)
+{
+	for (int i = 0; name && i < IMG_N_FORMATS; i++) {
+		if (strcmp(name, formats[i].name) == 0) {
+			*f = (enum img_format)i;
+			return 0;
+		}
+	}
+	return -1;
+}
+
+/* The extension of path's last component ("" when it has none). */
+static const char *path_ext(const char *path)
+{
+	const char *base = strrchr(path, '/');
+	base = base ? base + 1 : path;
+	const char *dot = strrchr(base, '.');
+	return dot && dot != base ? dot : "";
+}
+
+int img_format_by_ext(const char *path, enum img_format *f)
+{
+	const char *ext = path ? path_ext(path) : "";
+	for (int i = 0; *ext && i < IMG_N_FORMATS; i++) {
+		if (strcasecmp(ext, formats[i].ext) == 0) {
+			*f = (enum img_format)i; /* the first format with it: png, exr */
+			return 0;
+		}
+	}
+	return -1;
+}
+
+int img_format_ext_matches(const char *path, enum img_format f)
+{
+	return f >= 0 && f < IMG_N_FORMATS && path && strcasecmp(path_ext(path), formats[f].ext) == 0;
+}
+
+const char *img_format_name(enum img_format f)
+{
+	return f >= 0 && f < IMG_N_FORMATS ? formats[f].name : "?";
+}
+
+const char *img_format_ext(enum img_format f)
+{
+	return f >= 0 && f < IMG_N_FORMATS ? formats[f].ext : "";
+}
+
+size_t img_text_clean(const char *value, char *out)
+{
+	size_t n = 0;
+	for (; value[n] && n < IMG_TEXT_VALUE_MAX; n++) {
+		unsigned char c = (unsigned char)value[n];
+		out[n] = (char)((c >= 0x20 && c < 0x7f) || c == '\n' ? c : '?');
+	}
+	out[n] = 0;
+	return n;
+}
+
+void img_exr_attr_name(const char *key, char *out)
+{
+	size_t n = 0;
+	int up = 0;
+	for (; *key && n < IMG_TEXT_KEY_MAX; key++) {
+		if (*key == ' ') {
+			up = 1;
+			continue;
+		}
+		char c = *key;
+		if (n == 0 && c >= 'A' && c <= 'Z')
+			c = (char)(c - 'A' + 'a');
+		else if (up && c >= 'a' && c <= 'z')
+			c = (char)(c - 'a' + 'A');
+		out[n++] = c;
+		up = 0;
+	}
+	out[n] = 0;
+}
+
+/* A PNG keyword that is also a sound OpenEXR name: 1..IMG_TEXT_KEY_MAX
+ * printable ASCII characters, no space at either end or next to another. */
+static int text_key_ok(const char *k)
+{
+	size_t n = k ? strlen(k) : 0;
+	if (n == 0 || n > IMG_TEXT_KEY_MAX || k[0] == ' ' || k[n - 1] == ' ')
+		return 0;
+	for (size_t i = 0; i < n; i++)
+		if (k[i] < 0x20 || k[i] > 0x7e || (k[i] == ' ' && k[i + 1] == ' '))
+			return 0;
+	return 1;
+}
+
+/* d is something the writers can write: size, pixels, format, texts whose
+ * OpenEXR names clash with no attribute of ours nor with each other. */
+static int desc_ok(const struct img_desc *d)
+{
+	static const char *taken[] = { "channels",    "chromaticities",   "colorInteropID",     "compression",
+				       "dataWindow",  "displayWindow",    "lineOrder",          "pixelAspectRatio",
+				       "screenWindowCenter", "screenWindowWidth" };
+	if (!d || !d->pixels || !img_size_ok(d->w, d->h) || (d->type != IMG_RGB8 && d->type != IMG_RGBF32) ||
+	    d->format < 0 || d->format >= IMG_N_FORMATS || d->n_text > IMG_TEXT_MAX || (d->n_text && !d->text))
+		return 0;
+	char names[IMG_TEXT_MAX][IMG_TEXT_KEY_MAX + 1];
+	for (size_t i = 0; i < d->n_text; i++) {
+		if (!text_key_ok(d->text[i].key) || !d->text[i].value)
+			return 0;
+		img_exr_attr_name(d->text[i].key, names[i]);
+		for (size_t t = 0; t < sizeof taken / sizeof taken[0]; t++)
+			if (strcmp(names[i], taken[t]) == 0)
+				return 0;
+		for (size_t j = 0; j < i; j++)
+			if (strcmp(names[i], names[j]) == 0)
+				return 0;
+	}
+	return 1;
+}
 
 /* Writes all n bytes (short writes and EINTR retried). 0 or -1 with errno. */
 static int write_all(int fd, const uint8_t *p, size_t n)
@@ -738,16 +991,245 @@ static int write_all(int fd, const uint8_t *p, size_t n)
 	return 0;
 }
 
-/* Writes the encoded PNG (data, n) or, when data is NULL, the PPM header
- * (head, hn) and the pixels. 0 or -1 with errno. */
-static int write_image(int fd, const uint8_t *data, size_t n, const char *head, int hn, const uint8_t *rgb,
-		       uint32_t w, uint32_t h)
+int img_sink_flush(struct img_sink *s)
 {
-	if (data)
-		return write_all(fd, data, n);
-	if (write_all(fd, (const uint8_t *)head, (size_t)hn) < 0)
+	if (!s->err && s->fd >= 0 && s->n > 0) {
+		if (write_all(s->fd, s->p, s->n) < 0)
+			s->err = errno ? errno : EIO;
+		s->n = 0;
+	}
+	return s->err ? -1 : 0;
+}
+
+void img_sink_bytes(struct img_sink *s, const void *src, size_t n)
+{
+	const uint8_t *p = src;
+	if (s->err || n == 0)
+		return;
+	if (s->fd < 0) {
+		if (s->cap - s->n < n) {
+			size_t ncap = s->cap ? s->cap : 4096;
+			while (ncap - s->n < n) {
+				if (ncap > SIZE_MAX / 2) {
+					s->err = ENOMEM;
+					return;
+				}
+				ncap *= 2;
+			}
+			uint8_t *np = realloc(s->p, ncap);
+			if (!np) {
+				s->err = ENOMEM;
+				return;
+			}
+			s->p = np;
+			s->cap = ncap;
+		}
+		memcpy(s->p + s->n, p, n);
+		s->n += n;
+		return;
+	}
+	if (!s->p) {
+		s->p = malloc(IMG_SINK_BUF);
+		s->cap = IMG_SINK_BUF;
+		if (!s->p) {
+			s->err = ENOMEM;
+			return;
+		}
+	}
+	if (n >= s->cap) { /* large: straight through */
+		if (img_sink_flush(s) == 0 && write_all(s->fd, p, n) < 0)
+			s->err = errno ? errno : EIO;
+		return;
+	}
+	while (n > 0 && !s->err) {
+		if (s->n == s->cap)
+			img_sink_flush(s);
+		size_t k = s->cap - s->n < n ? s->cap - s->n : n;
+		memcpy(s->p + s->n, p, k);
+		s->n += k;
+		p += k;
+		n -= k;
+	}
+}
+
+void img_sink_le32(struct img_sink *s, uint32_t v)
+{
+	uint8_t b[4] = { (uint8_t)v, (uint8_t)(v >> 8), (uint8_t)(v >> 16), (uint8_t)(v >> 24) };
+	img_sink_bytes(s, b, 4);
+}
+
+void img_sink_le64(struct img_sink *s, uint64_t v)
+{
+	img_sink_le32(s, (uint32_t)v);
+	img_sink_le32(s, (uint32_t)(v >> 32));
+}
+
+/* Streams the formats that are written as they are made (PPM, PFM, EXR). */
+static void emit_stream(const struct img_desc *d, struct img_sink *s)
+{
+	switch (d->format) {
+	case IMG_PFM: img_pfm_emit(d, s); break;
+	case IMG_EXR:
+	case IMG_EXR_HALF: img_exr_emit(d, s); break;
+	default: { /* IMG_PPM */
+		char head[64];
+		int hn = snprintf(head, sizeof head, "P6\n%u %u\n255\n", (unsigned)d->w, (unsigned)d->h);
+		img_sink_bytes(s, head, (size_t)hn);
+		size_t n = 3 * (size_t)d->w;
+		if (d->type == IMG_RGB8) {
+			img_sink_bytes(s, d->pixels, n * d->h);
+			break;
+		}
+		uint8_t *row = malloc(n);
+		if (!row) {
+			if (!s->err)
+				s->err = ENOMEM;
+			break;
+		}
+		for (uint32_t y = 0; y < d->h && !s->err; y++) {
+			const float *p = (const float *)d->pixels + y * n;
+			for (size_t i = 0; i < n; i++)
+				row[i] = (uint8_t)quantise(p[i], 255.0);
+			img_sink_bytes(s, row, n);
+		}
+		free(row);
+		break;
+	}
+	}
+}
+
+static int is_png_format(enum img_format f)
+{
+	return f == IMG_PNG || f == IMG_PNG16;
+}
+
+int img_encode(const struct img_desc *d, uint8_t **out, size_t *out_len)
+{
+	*out = NULL;
+	*out_len = 0;
+	if (!desc_ok(d)) {
+		errno = EINVAL;
 		return -1;
-	return write_all(fd, rgb, 3 * (size_t)w * h);
+	}
+	if (is_png_format(d->format))
+		return png_encode(d, 0, out, out_len);
+	struct img_sink s = { .fd = -1 };
+	emit_stream(d, &s);
+	if (s.err) {
+		free(s.p);
+		errno = s.err;
+		return -1;
+	}
+	*out = s.p ? s.p : malloc(1);
+	*out_len = s.n;
+	return *out ? 0 : (errno = ENOMEM, -1);
+}
+
+/* ---- files ----------------------------------------------------------------------- */
+
+/* Writes d to fd: pre (n bytes) when the image was encoded in memory
+ * (PNG), else streamed. 0 or -1 with errno. */
+static int write_image(int fd, const uint8_t *pre, size_t n, const struct img_desc *d)
+{
+	if (pre)
+		return write_all(fd, pre, n);
+	struct img_sink s = { .fd = fd };
+	emit_stream(d, &s);
+	img_sink_flush(&s);
+	free(s.p);
+	if (s.err) {
+		errno = s.err;
+		return -1;
+	}
+	return 0;
+}
+
+/* "<path>.tmp.<pid>.<n>": the temporary beside path (tmp holds plen + 64). */
+static void tmp_name(char *tmp, size_t cap, const char *path)
+{
+	static unsigned counter;
+	unsigned k = __atomic_add_fetch(&counter, 1, __ATOMIC_RELAXED);
+	snprintf(tmp, cap, "%s.tmp.%ld.%u", path, (long)getpid(), k);
+}
+
+/*
+ * Writes d (validated) to path: see img_write for the file handling. plain:
+ * a PNG with no chunk beyond IHDR, IDAT, IEND. PNGs are encoded before any
+ * file is touched; the streamed formats are made as they are written.
+ */
+static int write_path(const char *path, const struct img_desc *d, int plain)
+{
+	uint8_t *data = NULL;
+	size_t n = 0;
+	if (is_png_format(d->format) && png_encode(d, plain, &data, &n) < 0)
+		return -1;
+	if (strcmp(path, "-") == 0 && !plain) { /* standard output (img_write_opts only) */
+		int rc = write_image(STDOUT_FILENO, data, n, d);
+		int e = errno;
+		free(data);
+		errno = e;
+		return rc;
+	}
+
+	/* a symbolic link is written through: the temporary goes next to its
+	 * target and is renamed over the target, and the link stays */
+	struct stat st;
+	char *real = NULL;
+	if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode) && (real = realpath(path, NULL)) != NULL)
+		path = real;
+	if (stat(path, &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) {
+		int fd = open(path, O_WRONLY | O_CLOEXEC);
+		int rc = fd < 0 ? -1 : write_image(fd, data, n, d);
+		int e = errno;
+		if (fd >= 0 && close(fd) < 0 && rc == 0)
+			e = errno, rc = -1;
+		free(data);
+		free(real);
+		errno = e;
+		return rc;
+	}
+
+	size_t plen = strlen(path);
+	char *tmp = malloc(plen + 64);
+	if (!tmp) {
+		free(data);
+		free(real);
+		errno = ENOMEM;
+		return -1;
+	}
+	int fd = -1;
+	for (int tries = 0; tries < 100 && fd < 0; tries++) {
+		tmp_name(tmp, plen + 64, path);
+		fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+		if (fd < 0 && errno != EEXIST)
+			break;
+	}
+	if (fd < 0) {
+		int e = errno;
+		free(data);
+		free(tmp);
+		free(real);
+		errno = e;
+		return -1;
+	}
+	int rc = write_image(fd, data, n, d);
+	if (rc == 0)
+		rc = fsync(fd);
+	if (close(fd) < 0 && rc == 0)
+		rc = -1;
+	if (rc == 0)
+		rc = rename(tmp, path);
+	if (rc != 0) {
+		int e = errno;
+		unlink(tmp);
+		errno = e;
+	}
+	int e = errno;
+	free(data);
+	free(tmp);
+	free(real);
+	errno = e;
+	return rc == 0 ? 0 : -1;
 }
 
 /* Case-insensitive "ends with .png". */
@@ -770,81 +1252,97 @@ static int is_png_name(const char *path)
  */
 int img_write(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h)
 {
-	static unsigned counter;
-	uint8_t *data = NULL;
-	size_t n = 0;
-	char head[64];
-	int hn = 0;
-
 	if (!path || !*path || !img_size_ok(w, h) || !rgb) {
 		errno = EINVAL;
 		return -1;
 	}
-	if (is_png_name(path)) {
-		if (img_png_encode(rgb, w, h, &data, &n) < 0)
-			return -1;
-	} else {
-		hn = snprintf(head, sizeof head, "P6\n%u %u\n255\n", (unsigned)w, (unsigned)h);
-	}
+	struct img_desc d = { .w = w, .h = h, .type = IMG_RGB8, .pixels = rgb,
+			      .format = is_png_name(path) ? IMG_PNG : IMG_PPM };
+	return write_path(path, &d, 1);
+}
 
-	/* a symbolic link is written through: the temporary goes next to its
-	 * target and is renamed over the target, and the link stays */
+int img_write_opts(const char *path, const struct img_desc *d)
+{
+	if (!path || !*path || !desc_ok(d)) {
+		errno = EINVAL;
+		return -1;
+	}
+	return write_path(path, d, 0);
+}
+
+/* The directory of path ("." for a bare name) into dir (dir_len > 0). */
+static void dir_of(const char *path, char *dir, size_t dir_len)
+{
+	const char *slash = strrchr(path, '/');
+	if (!slash) {
+		snprintf(dir, dir_len, ".");
+		return;
+	}
+	while (slash > path && slash[-1] == '/')
+		slash--;
+	int n = slash == path ? 1 : (int)(slash - path); /* "/x" -> "/" */
+	snprintf(dir, dir_len, "%.*s", n, path);
+}
+
+int img_output_check(const char *path, char *dir, size_t dir_len)
+{
+	char scratch[8];
+	if (!dir || dir_len == 0) {
+		dir = scratch;
+		dir_len = sizeof scratch;
+	}
+	dir[0] = 0;
+	if (!path || !*path) {
+		errno = EINVAL;
+		return -1;
+	}
+	if (strcmp(path, "-") == 0) {
+		/* standard output: open, and not for reading only */
+		int fl = fcntl(STDOUT_FILENO, F_GETFL);
+		if (fl >= 0 && (fl & O_ACCMODE) != O_RDONLY)
+			return 0;
+		snprintf(dir, dir_len, "standard output");
+		errno = fl < 0 ? EBADF : EACCES;
+		return -1;
+	}
+	/* the file img_write_opts would touch: a link's target */
 	struct stat st;
 	char *real = NULL;
 	if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode) && (real = realpath(path, NULL)) != NULL)
 		path = real;
-	if (stat(path, &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) {
-		int fd = open(path, O_WRONLY | O_CLOEXEC);
-		int rc = fd < 0 ? -1 : write_image(fd, data, n, head, hn, rgb, w, h);
-		int e = errno;
-		if (fd >= 0 && close(fd) < 0 && rc == 0)
-			e = errno, rc = -1;
-		free(data);
-		free(real);
-		errno = e;
-		return rc;
-	}
-
-	size_t plen = strlen(path);
-	char *tmp = malloc(plen + 64);
-	if (!tmp) {
-		free(data);
-		free(real);
-		errno = ENOMEM;
-		return -1;
-	}
-	int fd = -1;
-	for (int tries = 0; tries < 100 && fd < 0; tries++) {
-		unsigned k = __atomic_add_fetch(&counter, 1, __ATOMIC_RELAXED);
-		snprintf(tmp, plen + 64, "%s.tmp.%ld.%u", path, (long)getpid(), k);
-		fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-		if (fd < 0 && errno != EEXIST)
-			break;
-	}
-	if (fd < 0) {
-		int e = errno;
-		free(data);
-		free(tmp);
-		free(real);
-		errno = e;
-		return -1;
-	}
-	int rc = write_image(fd, data, n, head, hn, rgb, w, h);
-	if (rc == 0)
-		rc = fsync(fd);
-	if (close(fd) < 0 && rc == 0)
+	int rc = 0, e = 0;
+	if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+		snprintf(dir, dir_len, "%s", path);
+		e = EISDIR;
 		rc = -1;
-	if (rc == 0)
-		rc = rename(tmp, path);
-	if (rc != 0) {
-		int e = errno;
-		unlink(tmp);
-		errno = e;
+	} else if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+		rc = access(path, W_OK); /* written in place */
+		e = errno;
+		if (rc)
+			snprintf(dir, dir_len, "%s", path);
+	} else {
+		/* the temporary file the write makes, made and removed now */
+		size_t plen = strlen(path);
+		char *tmp = malloc(plen + 64);
+		int fd = -1;
+		e = ENOMEM;
+		for (int tries = 0; tmp && tries < 100 && fd < 0; tries++) {
+			tmp_name(tmp, plen + 64, path);
+			fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+			e = errno;
+			if (fd < 0 && errno != EEXIST)
+				break;
+		}
+		if (fd >= 0) {
+			close(fd);
+			unlink(tmp);
+		} else {
+			dir_of(path, dir, dir_len);
+			rc = -1;
+		}
+		free(tmp);
 	}
-	int e = errno;
-	free(data);
-	free(tmp);
 	free(real);
 	errno = e;
-	return rc == 0 ? 0 : -1;
+	return rc;
 }

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "common/img.h"
 #include "common/tiles.h"
 #include "master/master.h"
 #include "proto/net.h"
@@ -18,7 +19,12 @@ static void usage(FILE *f)
 		"Render a PortRAY scene, locally on all cores or on a farm of portray-worker daemons.\n"
 		"\n"
 		"  -c, --camera FILE        camera file (camera, image and light statements)\n"
-		"  -o, --output FILE        output image, .png or .ppm (default: SCENE with .png)\n"
+		"  -o, --output FILE        output image, .png .ppm .pfm or .exr (default: SCENE with\n"
+		"                           .png); - for standard output (PNG unless --format)\n"
+		"      --format F           png, png16, ppm, pfm, exr (float) or exr-half; the default\n"
+		"                           is the one the output's extension names\n"
+		"      --no-render-time     no render-time text in PNG and EXR files (identical bytes\n"
+		"                           for identical renders)\n"
 		"      --check              parse the scene, print a summary, exit with its error level\n"
 		"  -j, --threads N          local threads (default: all cores)\n"
 		"      --tile N             tile side in pixels (default %u)\n"
@@ -41,7 +47,8 @@ static void usage(FILE *f)
 		"  -V, --version            show the version\n"
 		"\n"
 		"Exit status: 0 success; 1 and 2 the PortRAY manual's error levels (Appendix B);\n"
-		"64 usage; 69 no worker left with --no-local; 74 output not written.\n",
+		"64 usage (an unknown output extension too); 69 no worker left with --no-local; 74 output\n"
+		"not written (a missing or read-only directory is found before rendering).\n",
 		TILE_DEFAULT);
 }
 
@@ -57,7 +64,7 @@ static int parse_uint(const char *s, unsigned long max, unsigned long *out)
 }
 
 enum { OPT_CHECK = 256, OPT_TILE, OPT_SIZE, OPT_WFILE, OPT_SECRET, OPT_NOLOCAL, OPT_HB, OPT_AUDIT, OPT_ACCEPT,
-       OPT_PORTFILE, OPT_INSECURE };
+       OPT_PORTFILE, OPT_INSECURE, OPT_FORMAT, OPT_NO_RTIME };
 
 int main(int argc, char **argv)
 {
@@ -78,6 +85,8 @@ int main(int argc, char **argv)
 		{ "accept", required_argument, NULL, OPT_ACCEPT },
 		{ "port-file", required_argument, NULL, OPT_PORTFILE },
 		{ "insecure", no_argument, NULL, OPT_INSECURE },
+		{ "format", required_argument, NULL, OPT_FORMAT },
+		{ "no-render-time", no_argument, NULL, OPT_NO_RTIME },
 		{ "help", no_argument, NULL, 'h' },
 		{ "version", no_argument, NULL, 'V' },
 		{ NULL, 0, NULL, 0 },
@@ -124,6 +133,17 @@ int main(int argc, char **argv)
 		case OPT_ACCEPT: o.accept = optarg; break;
 		case OPT_PORTFILE: o.port_file = optarg; break;
 		case OPT_INSECURE: o.insecure = true; break;
+		case OPT_FORMAT: {
+			enum img_format f;
+			if (img_format_parse(optarg, &f) < 0) {
+				fprintf(stderr, "portray-master: --format wants png, png16, ppm, pfm, exr or exr-half, "
+					"not '%s'\n", optarg);
+				return EXIT_USAGE;
+			}
+			o.format = optarg;
+			break;
+		}
+		case OPT_NO_RTIME: o.no_render_time = true; break;
 		case OPT_HB: {
 			char *end;
 			o.heartbeat_s = strtod(optarg, &end);

@@ -4,10 +4,13 @@
  * the image. Log lines and the progress bar go to stderr; stdout stays quiet.
  */
 #include <errno.h>
+#include <limits.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "common/filter.h"
 #include "common/img.h"
@@ -44,6 +47,109 @@ static char *default_output(const char *scene)
 	return out;
 }
 
+/* How the output is named in messages. */
+static const char *shown(const char *out)
+{
+	return strcmp(out, "-") == 0 ? "standard output" : out;
+}
+
+/*
+ * Settles the output before anything is parsed or traced, so that a
+ * render is never lost to a name that cannot be written: *out (the file,
+ * "-" for standard output; *out_alloc when made here, the caller frees it)
+ * and *fmt (--format, else the extension's format, else PNG for "-").
+ * Returns 0, EXIT_USAGE (unknown extension, --format against the
+ * extension, a binary image for a terminal) or EXIT_IO (img_output_check
+ * failed), having said why.
+ */
+static int output_plan(const struct master_opts *o, const char **out, char **out_alloc, enum img_format *fmt)
+{
+	*out = o->out;
+	if (!*out) {
+		*out = *out_alloc = default_output(o->scene);
+		if (!*out) {
+			fprintf(stderr, "portray-master: out of memory\n");
+			return ERRLEVEL_FATAL;
+		}
+	}
+	bool to_stdout = strcmp(*out, "-") == 0;
+	enum img_format by_ext;
+	bool known_ext = !to_stdout && img_format_by_ext(*out, &by_ext) == 0;
+	if (o->format) {
+		if (img_format_parse(o->format, fmt) < 0) {
+			fprintf(stderr, "portray-master: unknown --format '%s'\n", o->format);
+			return EXIT_USAGE;
+		}
+		if (known_ext && !img_format_ext_matches(*out, *fmt)) {
+			fprintf(stderr, "portray-master: --format %s does not go with the name %s (%s files end in %s)\n",
+				o->format, *out, o->format, img_format_ext(*fmt));
+			return EXIT_USAGE;
+		}
+	} else if (to_stdout) {
+		*fmt = IMG_PNG;
+	} else if (known_ext) {
+		*fmt = by_ext;
+	} else {
+		fprintf(stderr,
+			"portray-master: cannot tell the image format of %s from its name: known extensions are\n"
+			"portray-master: .png .ppm .pfm .exr (any case); or name one with --format png|png16|ppm|pfm|"
+			"exr|exr-half\n",
+			*out);
+		return EXIT_USAGE;
+	}
+	if (to_stdout && isatty(STDOUT_FILENO)) {
+		fprintf(stderr, "portray-master: -o - would write a binary image to the terminal; redirect standard "
+			"output to a file or a pipe\n");
+		return EXIT_USAGE;
+	}
+	char dir[PATH_MAX];
+	if (img_output_check(*out, dir, sizeof dir) < 0) {
+		int e = errno;
+		struct stat st;
+		if (e == ENOENT && stat(dir, &st) != 0)
+			fprintf(stderr, "portray-master: cannot write %s: no directory %s\n", *out, dir);
+		else if (e == EISDIR)
+			fprintf(stderr, "portray-master: cannot write %s: it is a directory\n", *out);
+		else if (e == ENOTDIR)
+			fprintf(stderr, "portray-master: cannot write %s: %s is not a directory\n", *out, dir);
+		else if (to_stdout)
+			fprintf(stderr, "portray-master: cannot write standard output: %s\n", strerror(e));
+		else
+			fprintf(stderr, "portray-master: cannot write %s: %s: %s\n", *out, dir, strerror(e));
+		return EXIT_IO;
+	}
+	return 0;
+}
+
+/*
+ * The text items of the image (PNG tEXt chunks, OpenEXR string attributes):
+ * Software, Source (the scene's and camera's file names, without their
+ * directories), Render time (unless --no-render-time) and, for a partial
+ * image, Warning. Strings live in bufs (4 x 512 bytes). Returns the count.
+ */
+static size_t output_texts(const struct master_opts *o, double seconds, const char *partial,
+			   struct img_text *t, char bufs[4][512])
+{
+	size_t n = 0;
+	t[n++] = (struct img_text){ "Software", "portray " PORTRAY_VERSION };
+	const char *scene = strrchr(o->scene, '/'), *cam = o->camera ? strrchr(o->camera, '/') : NULL;
+	scene = scene ? scene + 1 : o->scene;
+	if (o->camera)
+		snprintf(bufs[0], 512, "%s (camera file %s)", scene, cam ? cam + 1 : o->camera);
+	else
+		snprintf(bufs[0], 512, "%s", scene);
+	t[n++] = (struct img_text){ "Source", bufs[0] };
+	if (!o->no_render_time) {
+		snprintf(bufs[1], 512, "%.3f s", seconds);
+		t[n++] = (struct img_text){ "Render time", bufs[1] };
+	}
+	if (partial) {
+		snprintf(bufs[2], 512, "partial image: %s", partial);
+		t[n++] = (struct img_text){ "Warning", bufs[2] };
+	}
+	return n;
+}
+
 int master_render(const struct master_opts *o)
 {
 	struct scene *s = NULL, *ds = NULL;
@@ -57,7 +163,12 @@ int master_render(const struct master_opts *o)
 	int rc;
 	bool watching = false;
 	double t0 = progress_now();
+	const char *out;
+	enum img_format fmt;
 
+	rc = output_plan(o, &out, &out_alloc, &fmt);
+	if (rc)
+		goto done;
 	rc = parse_files(o->camera, o->scene, &s, &err);
 	if (rc) {
 		fprintf(stderr, "%s\n", err.msg);
@@ -103,15 +214,6 @@ int master_render(const struct master_opts *o)
 	renderer_size(r, &w, &h);
 	double t_build = progress_now();
 
-	const char *out = o->out;
-	if (!out) {
-		out = out_alloc = default_output(o->scene);
-		if (!out) {
-			fprintf(stderr, "portray-master: out of memory\n");
-			rc = ERRLEVEL_FATAL;
-			goto done;
-		}
-	}
 	image = calloc((size_t)w * h, 3); /* unfinished pixels stay black */
 	if (!image) {
 		fprintf(stderr, "portray-master: out of memory for a %ux%u image\n", w, h);
@@ -141,8 +243,22 @@ int master_render(const struct master_opts *o)
 	double t_render = progress_now();
 	bool partial = farm ? atomic_load(&cancel) != 0 : finished < total;
 
-	if (img_write(out, image, w, h) < 0) {
-		fprintf(stderr, "portray-master: cannot write %s: %s\n", out, strerror(errno));
+	char partial_why[160] = "", bufs[4][512];
+	if (partial) {
+		const char *how = interrupt_reason() == INTERRUPT_KEY ? "stopped" : "interrupted";
+		if (!atomic_load(&cancel))
+			how = "out of memory";
+		if (farm && atomic_load(&cancel))
+			snprintf(partial_why, sizeof partial_why, "%s", how);
+		else
+			snprintf(partial_why, sizeof partial_why, "%s, %llu of %llu tiles", how,
+				 (unsigned long long)finished, (unsigned long long)total);
+	}
+	struct img_text texts[4];
+	struct img_desc desc = { .w = w, .h = h, .type = IMG_RGB8, .pixels = image, .format = fmt, .text = texts };
+	desc.n_text = output_texts(o, t_render - t0, partial ? partial_why : NULL, texts, bufs);
+	if (img_write_opts(out, &desc) < 0) {
+		fprintf(stderr, "portray-master: cannot write %s: %s\n", shown(out), strerror(errno));
 		rc = EXIT_IO;
 		goto done;
 	}
@@ -150,16 +266,16 @@ int master_render(const struct master_opts *o)
 		/* no interrupt, yet tiles are missing: every render thread failed to get
 		 * its tile buffer. Appendix B level 2: unable to allocate heap space. */
 		fprintf(stderr, "portray-master: out of memory: %llu of %llu tiles rendered; partial image "
-			"written to %s\n", (unsigned long long)finished, (unsigned long long)total, out);
+			"written to %s\n", (unsigned long long)finished, (unsigned long long)total, shown(out));
 		rc = ERRLEVEL_LEVEL2;
 	} else if (partial) {
 		const char *why = interrupt_reason() == INTERRUPT_KEY ? "stopped" : "interrupted";
 		if (farm)
-			fprintf(stderr, "portray-master: %s: partial image written to %s\n", why, out);
+			fprintf(stderr, "portray-master: %s: partial image written to %s\n", why, shown(out));
 		else
 			fprintf(stderr, "portray-master: %s: %llu of %llu tiles (%d%%) written to %s\n", why,
 				(unsigned long long)finished, (unsigned long long)total,
-				(int)(100 * finished / total), out);
+				(int)(100 * finished / total), shown(out));
 		rc = interrupt_reason() == INTERRUPT_SIGNAL ? EXIT_INTERRUPTED : 0;
 	} else if (!o->quiet && !farm) {
 		double tr = t_render - t_build;
@@ -167,7 +283,7 @@ int master_render(const struct master_opts *o)
 		fprintf(stderr,
 			"portray-master: %s: %ux%u, %d thread%s, %llu tiles, %.3f s (parse %.3f, build %.3f, "
 			"trace %.3f), %llu eye rays, %.2f Mrays/s\n",
-			out, w, h, threads, threads == 1 ? "" : "s", (unsigned long long)total,
+			shown(out), w, h, threads, threads == 1 ? "" : "s", (unsigned long long)total,
 			t_render - t0, t_parse - t0, t_build - t_parse, tr, (unsigned long long)rays,
 			tr > 0 ? rays / tr * 1e-6 : 0.0);
 	}

@@ -1,6 +1,6 @@
 /*
  * inflate.h - a small, independent inflate (RFC 1951), zlib (RFC 1950) and
- * PNG (RGB8, all five filters) decoder, used only by the tests to check the
+ * PNG (RGB, 8 or 16 bits, all five filters) decoder, used only by the tests to check the
  * encoder in common/img.c. It shares no code with img.c: its own bitwise
  * CRC-32 and plain Adler-32, its own Huffman decoding (canonical codes walked
  * one bit at a time). Strict: incomplete or over-subscribed codes are
@@ -347,12 +347,14 @@ static uint8_t inf_paeth(int a, int b, int c)
 }
 
 /*
- * Decodes an 8-bit RGB, non-interlaced PNG. On success returns 0 with *rgb
- * malloc'd (w*h*3 bytes, caller frees). *n_idat counts IDAT chunks, blocks
- * the deflate block types, filters[5] how often each row filter was used.
+ * Decodes an 8- or 16-bit RGB, non-interlaced PNG. On success returns 0 with
+ * *samples malloc'd (w*h*3 samples of *depth bits, 16-bit ones big-endian
+ * as in the file; caller frees). *n_idat counts IDAT chunks, blocks the
+ * deflate block types, filters[5] how often each row filter was used.
+ * Chunks other than IHDR, IDAT and IEND must be ancillary; they are skipped.
  */
-static int inf_png(const uint8_t *p, size_t n, uint8_t **rgb, uint32_t *w, uint32_t *h, int *n_idat,
-		   int blocks[3], int filters[5])
+static int inf_png_any(const uint8_t *p, size_t n, uint8_t **samples, uint32_t *w, uint32_t *h, int *depth,
+		       int *n_idat, int blocks[3], int filters[5])
 {
 	static const uint8_t sig[8] = { 0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n' };
 	if (n < 8 || memcmp(p, sig, 8) != 0)
@@ -371,11 +373,12 @@ static int inf_png(const uint8_t *p, size_t n, uint8_t **rgb, uint32_t *w, uint3
 		if (inf_crc32(type, 4 + (size_t)len, 0) != inf_be32(data + len))
 			goto bad;
 		if (!memcmp(type, "IHDR", 4)) {
-			if (seen_ihdr || pos != 8 || len != 13 || data[8] != 8 || data[9] != 2 || data[10] ||
-			    data[11] || data[12])
+			if (seen_ihdr || pos != 8 || len != 13 || (data[8] != 8 && data[8] != 16) || data[9] != 2 ||
+			    data[10] || data[11] || data[12])
 				goto bad;
 			*w = inf_be32(data);
 			*h = inf_be32(data + 4);
+			*depth = data[8];
 			seen_ihdr = 1;
 		} else if (!memcmp(type, "IDAT", 4)) {
 			if (!seen_ihdr)
@@ -404,7 +407,7 @@ static int inf_png(const uint8_t *p, size_t n, uint8_t **rgb, uint32_t *w, uint3
 		goto bad;
 	free(z);
 	z = NULL;
-	size_t rb = 3 * (size_t)*w;
+	size_t bpp = (size_t)(*depth / 8) * 3, rb = bpp * *w;
 	if (rn != (rb + 1) * *h) {
 		free(raw);
 		return -31;
@@ -428,17 +431,31 @@ static int inf_png(const uint8_t *p, size_t n, uint8_t **rgb, uint32_t *w, uint3
 		}
 		filters[f]++;
 		for (size_t i = 0; i < rb; i++) {
-			int a = i >= 3 ? row[i - 3] : 0, b = up ? up[i] : 0, c = i >= 3 && up ? up[i - 3] : 0;
+			int a = i >= bpp ? row[i - bpp] : 0, b = up ? up[i] : 0, c = i >= bpp && up ? up[i - bpp] : 0;
 			int pred = f == 0 ? 0 : f == 1 ? a : f == 2 ? b : f == 3 ? (a + b) / 2 : inf_paeth(a, b, c);
 			row[i] = (uint8_t)(src[1 + i] + pred);
 		}
 	}
 	free(raw);
-	*rgb = img;
+	*samples = img;
 	return 0;
 bad:
 	free(z);
 	return -34;
+}
+
+/* inf_png_any for 8-bit PNGs only: *rgb holds w*h*3 bytes. */
+static int inf_png(const uint8_t *p, size_t n, uint8_t **rgb, uint32_t *w, uint32_t *h, int *n_idat,
+		   int blocks[3], int filters[5])
+{
+	int depth = 0;
+	int rc = inf_png_any(p, n, rgb, w, h, &depth, n_idat, blocks, filters);
+	if (rc == 0 && depth != 8) {
+		free(*rgb);
+		*rgb = NULL;
+		return -35;
+	}
+	return rc;
 }
 
 #endif

@@ -18,6 +18,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "common/crc32.h"
 #include "common/img.h"
 #include "common/limits.h"
 #include "tests/unit/check.h"
