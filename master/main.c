@@ -23,8 +23,9 @@ static void usage(FILE *f)
 		"                           .png); - for standard output (PNG unless --format)\n"
 		"      --format F           png, png16, ppm, pfm, exr (float) or exr-half; the default\n"
 		"                           is the one the output's extension names\n"
-		"      --no-render-time     no render-time text in PNG and EXR files (identical bytes\n"
-		"                           for identical renders)\n"
+		"      --render-time        write the render time as a PNG text / EXR attribute (two\n"
+		"                           renders then differ in it; default: left out, the same\n"
+		"                           render gives the same bytes; --no-render-time says so)\n"
 		"      --check              parse the scene, print a summary, exit with its error level\n"
 		"  -j, --threads N          local threads (default: all cores)\n"
 		"      --tile N             tile side in pixels (default %u)\n"
@@ -64,7 +65,7 @@ static int parse_uint(const char *s, unsigned long max, unsigned long *out)
 }
 
 enum { OPT_CHECK = 256, OPT_TILE, OPT_SIZE, OPT_WFILE, OPT_SECRET, OPT_NOLOCAL, OPT_HB, OPT_AUDIT, OPT_ACCEPT,
-       OPT_PORTFILE, OPT_INSECURE, OPT_FORMAT, OPT_NO_RTIME };
+       OPT_PORTFILE, OPT_INSECURE, OPT_FORMAT, OPT_NO_RTIME, OPT_RTIME };
 
 int main(int argc, char **argv)
 {
@@ -87,11 +88,12 @@ int main(int argc, char **argv)
 		{ "insecure", no_argument, NULL, OPT_INSECURE },
 		{ "format", required_argument, NULL, OPT_FORMAT },
 		{ "no-render-time", no_argument, NULL, OPT_NO_RTIME },
+		{ "render-time", no_argument, NULL, OPT_RTIME },
 		{ "help", no_argument, NULL, 'h' },
 		{ "version", no_argument, NULL, 'V' },
 		{ NULL, 0, NULL, 0 },
 	};
-	struct master_opts o = { .tile = 0 /* TILE_DEFAULT */, .heartbeat_s = 10.0, .audit = MASTER_AUDIT_DEFAULT };
+	struct master_opts o = { .no_render_time = true, .tile = 0 /* TILE_DEFAULT */, .heartbeat_s = 10.0, .audit = MASTER_AUDIT_DEFAULT };
 	unsigned long v;
 	int c;
 	while ((c = getopt_long(argc, argv, "c:o:j:qw:hV", longopts, NULL)) != -1) {
@@ -144,6 +146,7 @@ int main(int argc, char **argv)
 			break;
 		}
 		case OPT_NO_RTIME: o.no_render_time = true; break;
+		case OPT_RTIME: o.no_render_time = false; break;
 		case OPT_HB: {
 			char *end;
 			o.heartbeat_s = strtod(optarg, &end);

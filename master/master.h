@@ -24,7 +24,7 @@ struct master_opts {
 	const char *scene;     /* SCENE */
 	const char *out;       /* -o FILE ("-": standard output), default: scene name with .png */
 	const char *format;    /* --format NAME (img_format_parse), NULL: by the extension of out */
-	bool no_render_time;   /* --no-render-time: no render-time text, so files are byte-identical */
+	bool no_render_time;   /* no render-time text (the default: files stay byte-identical); --render-time clears it */
 	bool check;            /* --check: parse and summarise only */
 	int threads;           /* -j N, 0 = all cores */
 	uint32_t tile;         /* --tile N, 0 = TILE_DEFAULT (common/tiles.h) */

@@ -19,7 +19,7 @@ if [ $IM = 0 ] && [ $EXR = 0 ]; then
 fi
 SCENE=$ROOT/tests/data/spd/tetra_s4.sce
 for f in png png16 ppm pfm exr exr-half; do
-	"$MASTER" -q "$SCENE" --size 64x48 --format $f -o "$TMP/t.$f" 2>"$TMP/err" || fail "render $f: $(cat "$TMP/err")"
+	"$MASTER" -q "$SCENE" --size 64x48 --format $f --render-time -o "$TMP/t.$f" 2>"$TMP/err" || fail "render $f: $(cat "$TMP/err")"
 done
 for f in png16 pfm exr exr-half; do
 	cp "$TMP/t.$f" "$TMP/t_$f.$(echo $f | sed 's/16//; s/-half//')"

@@ -2,7 +2,7 @@
 # render_formats.sh - output formats from the command line: each one by its
 # extension and by --format, its header and size; the 8-bit PNG's chunks; -o -
 # on standard output; byte-identical files across threads and tiles in every
-# format (the render-time text apart, the only bytes that change from run to
+# format (the render-time text apart, written only with --render-time, the only bytes that change from run to
 # run); and the output refused before any tracing (exit 64 or 74 at once, on
 # a scene whose first pixel never ends).
 . tests/cli/render_lib.inc
@@ -58,7 +58,7 @@ check_format() {
 }
 
 # every format by extension (any case) and by --format
-render "$TMP/e.png"
+render "$TMP/e.png" --render-time
 check_format "$TMP/e.png" png
 render "$TMP/e.PPM"
 check_format "$TMP/e.PPM" ppm
@@ -88,6 +88,9 @@ sed -n 3p "$TMP/texts" | grep -qx 'Render time=[0-9]*\.[0-9][0-9][0-9] s' || fai
 "$CHUNKS" "$TMP/g.png" | grep -qx 'sBIT 3' || fail "16-bit PNG from 8-bit values without sBIT"
 render "$TMP/nt.png" --no-render-time
 "$CHUNKS" "$TMP/nt.png" | grep -q 'Render time' && fail "--no-render-time wrote a render time"
+render "$TMP/dflt.png"
+"$CHUNKS" "$TMP/dflt.png" | grep -q 'Render time' && fail "a render time written without --render-time"
+cmp "$TMP/dflt.png" "$TMP/nt.png" || fail "the default is not --no-render-time"
 # with a camera file, the Source names both files
 cat >"$TMP/view.cam" <<'CAM'
 camera look-from (0 0 10) look-at (0 0 0) ;
@@ -117,8 +120,8 @@ for f in png png16 ppm pfm exr exr-half; do
 	done
 done
 # with the render time, a PNG differs from another render in that text only
-render "$TMP/t1.png" -j 1 --tile 8
-render "$TMP/t2.png" -j 2 --tile 32
+render "$TMP/t1.png" -j 1 --tile 8 --render-time
+render "$TMP/t2.png" -j 2 --tile 32 --render-time
 "$CHUNKS" -d "Render time" "$TMP/t1.png" "$TMP/t1s.png" || fail "pngchunks -d"
 "$CHUNKS" -d "Render time" "$TMP/t2.png" "$TMP/t2s.png" || fail "pngchunks -d"
 cmp "$TMP/t1s.png" "$TMP/t2s.png" || fail "PNGs differ beyond their render time"
