@@ -23,6 +23,7 @@
 #include "common/limits.h"
 #include "tests/unit/check.h"
 #include "tests/unit/inflate.h"
+#include "tests/unit/slurp.h"
 
 static void test_checksums(void)
 {
@@ -315,23 +316,6 @@ static void test_png_roundtrips(void)
 }
 
 /* ---- files --------------------------------------------------------------------------- */
-
-static uint8_t *slurp(const char *path, size_t *n)
-{
-	FILE *f = fopen(path, "rb");
-	if (!f)
-		return NULL;
-	size_t cap = 1 << 16, len = 0, r;
-	uint8_t *b = malloc(cap);
-	while ((r = fread(b + len, 1, cap - len, f)) > 0) {
-		len += r;
-		if (len == cap)
-			b = realloc(b, cap *= 2);
-	}
-	fclose(f);
-	*n = len;
-	return b;
-}
 
 static int count_tmp_files(const char *dir)
 {

@@ -22,6 +22,7 @@
 #include "common/limits.h"
 #include "tests/unit/check.h"
 #include "tests/unit/inflate.h"
+#include "tests/unit/slurp.h"
 
 static uint32_t seed = 77;
 static uint32_t rnd(void)
@@ -706,23 +707,6 @@ static void test_invalid(void)
 }
 
 /* ---- files and standard output ------------------------------------------------------ */
-
-static uint8_t *slurp(const char *path, size_t *n)
-{
-	FILE *f = fopen(path, "rb");
-	if (!f)
-		return NULL;
-	size_t cap = 1 << 16, len = 0, r;
-	uint8_t *b = malloc(cap);
-	while ((r = fread(b + len, 1, cap - len, f)) > 0) {
-		len += r;
-		if (len == cap)
-			b = realloc(b, cap *= 2);
-	}
-	fclose(f);
-	*n = len;
-	return b;
-}
 
 /* What img_write_opts(path "-") puts on standard output, read through a pipe. */
 static uint8_t *via_stdout(const struct img_desc *d, size_t *n, int *rc)
