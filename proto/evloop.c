@@ -39,6 +39,7 @@ struct ev_loop {
 	uint32_t gen;
 	struct ev_timer **heap;
 	size_t n_heap, cap_heap;
+	struct ev_timer *overflow; /* armed while the heap could not grow (out of memory): scanned */
 	int wake[2];
 	ev_fn wake_fn;
 	void *wake_arg;
@@ -83,6 +84,8 @@ void ev_free(struct ev_loop *l)
 		return;
 	for (size_t i = 0; i < l->n_heap; i++)
 		l->heap[i]->slot = 0;
+	for (struct ev_timer *t = l->overflow; t; t = t->ov_next)
+		t->slot = 0;
 	for (int i = 0; i < 2; i++)
 		if (l->wake[i] >= 0)
 			close(l->wake[i]);
@@ -196,12 +199,23 @@ void ev_timer_init(struct ev_timer *t, ev_fn fn, void *arg)
 	t->fn = fn;
 	t->arg = arg;
 	t->slot = 0;
+	t->ov_next = NULL;
 }
 
 void ev_timer_stop(struct ev_loop *l, struct ev_timer *t)
 {
 	if (!t->slot)
 		return;
+	if (t->slot == EV_SLOT_OVERFLOW) {
+		for (struct ev_timer **pp = &l->overflow; *pp; pp = &(*pp)->ov_next)
+			if (*pp == t) {
+				*pp = t->ov_next;
+				break;
+			}
+		t->slot = 0;
+		t->ov_next = NULL;
+		return;
+	}
 	size_t i = t->slot - 1;
 	t->slot = 0;
 	l->n_heap--;
@@ -220,11 +234,12 @@ void ev_timer_arm(struct ev_loop *l, struct ev_timer *t, double at)
 		size_t nc = l->cap_heap ? l->cap_heap * 2 : 16;
 		struct ev_timer **p = realloc(l->heap, nc * sizeof *p);
 		if (!p) {
-			/* cannot happen after the first few timers; firing it at
-			 * once is the safe failure (every timer here is a deadline
-			 * or a periodic duty that re-arms itself) */
+			/* out of memory: the timer waits on a list the loop scans
+			 * (never fired early, never lost, never called from here) */
 			t->at = at;
-			t->fn(l, t->arg);
+			t->slot = EV_SLOT_OVERFLOW;
+			t->ov_next = l->overflow;
+			l->overflow = t;
 			return;
 		}
 		l->heap = p;
@@ -235,7 +250,23 @@ void ev_timer_arm(struct ev_loop *l, struct ev_timer *t, double at)
 	heap_up(l, l->n_heap - 1);
 }
 
-size_t ev_timers(const struct ev_loop *l) { return l->n_heap; }
+size_t ev_timers(const struct ev_loop *l)
+{
+	size_t n = l->n_heap;
+	for (const struct ev_timer *t = l->overflow; t; t = t->ov_next)
+		n++;
+	return n;
+}
+
+/* The overflow list's earliest deadline, or NULL. */
+static struct ev_timer *overflow_first(const struct ev_loop *l)
+{
+	struct ev_timer *best = NULL;
+	for (struct ev_timer *t = l->overflow; t; t = t->ov_next)
+		if (!best || t->at < best->at)
+			best = t;
+	return best;
+}
 
 /* ---- running ---- */
 
@@ -259,9 +290,14 @@ void ev_stop(struct ev_loop *l) { l->stop = true; }
 static void run_timers(struct ev_loop *l)
 {
 	double now = net_now();
-	size_t budget = l->n_heap;
-	while (l->n_heap && l->heap[0]->at <= now && budget--) {
-		struct ev_timer *t = l->heap[0];
+	size_t budget = ev_timers(l);
+	while (budget--) {
+		struct ev_timer *t = l->n_heap && l->heap[0]->at <= now ? l->heap[0] : NULL;
+		struct ev_timer *o = overflow_first(l);
+		if (o && o->at <= now && (!t || o->at < t->at))
+			t = o;
+		if (!t)
+			break;
 		ev_timer_stop(l, t);
 		t->fn(l, t->arg);
 	}
@@ -287,8 +323,11 @@ int ev_run_once(struct ev_loop *l, double max_wait)
 		l->pgen[i] = l->io[i].gen;
 	}
 	double wait = max_wait;
-	if (l->n_heap) {
-		double d = l->heap[0]->at - net_now();
+	struct ev_timer *first = l->n_heap ? l->heap[0] : NULL, *o = overflow_first(l);
+	if (o && (!first || o->at < first->at))
+		first = o;
+	if (first) {
+		double d = first->at - net_now();
 		if (d < 0)
 			d = 0;
 		if (wait < 0 || d < wait)

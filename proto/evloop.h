@@ -27,8 +27,10 @@ struct ev_timer {
 	double at;      /* net_now() seconds when it fires */
 	ev_fn fn;
 	void *arg;
-	size_t slot;    /* position in the heap + 1; 0 when not armed */
+	size_t slot;    /* position in the heap + 1; EV_SLOT_OVERFLOW; 0 when not armed */
+	struct ev_timer *ov_next; /* on the overflow list (the heap could not grow) */
 };
+#define EV_SLOT_OVERFLOW ((size_t)-1)
 
 /* A new loop with its self-pipe; NULL when out of descriptors or memory. */
 struct ev_loop *ev_new(void);
