@@ -31,6 +31,7 @@
 #include <unistd.h>
 
 #include "proto/net.h"
+#include "tests/tools/stop.h"
 
 /* bytes read per read() call: one chunk of a queue */
 #define DP_READ_BYTES (64 * 1024)
@@ -76,19 +77,7 @@ static struct {
 
 static struct dp_pair **pairs;
 static size_t n_pairs, cap_pairs;
-static volatile sig_atomic_t stop_flag;
-static int wake_pipe[2] = { -1, -1 }; /* the signal handler wakes poll() through it */
 static unsigned char rbuf[DP_READ_BYTES];
-
-static void on_signal(int sig)
-{
-	(void)sig;
-	int e = errno;
-	stop_flag = 1;
-	ssize_t r = write(wake_pipe[1], "", 1);
-	(void)r; /* a full pipe already wakes poll() */
-	errno = e;
-}
 
 static void dir_init(struct dp_dir *d, int src, int dst)
 {
@@ -334,17 +323,10 @@ int main(int argc, char **argv)
 		fprintf(stderr, "delayproxy: cannot write %s: %s\n", port_file, strerror(errno));
 		return 73;
 	}
-	if (pipe(wake_pipe) < 0) {
+	if (stop_init() < 0) {
 		perror("delayproxy: pipe");
 		return 71;
 	}
-	fcntl(wake_pipe[1], F_SETFL, fcntl(wake_pipe[1], F_GETFL) | O_NONBLOCK);
-	struct sigaction sa;
-	memset(&sa, 0, sizeof sa);
-	sa.sa_handler = on_signal;
-	sigaction(SIGTERM, &sa, NULL);
-	sigaction(SIGINT, &sa, NULL);
-	signal(SIGPIPE, SIG_IGN);
 	if (!opt.quiet)
 		fprintf(stderr, "delayproxy: listening on %s:%d, to %s, %ld ms each way\n", host, net_local_port(lfd),
 			to, delay_ms);

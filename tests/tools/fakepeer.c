@@ -57,6 +57,7 @@
 
 #include "proto/net.h"
 #include "proto/proto.h"
+#include "tests/tools/stop.h"
 
 /* the largest scene a fake worker buffers (it checks the hash over all of it) */
 #define FP_SCENE_MAX (256u << 20)
@@ -72,19 +73,7 @@
 
 /* ---- common ---- */
 
-static volatile sig_atomic_t stop_flag;
-static int wake_pipe[2] = { -1, -1 };
 static const char *role = "fakepeer";
-
-static void on_signal(int sig)
-{
-	(void)sig;
-	int e = errno;
-	stop_flag = 1;
-	ssize_t r = write(wake_pipe[1], "", 1);
-	(void)r; /* a full pipe already wakes poll() */
-	errno = e;
-}
 
 static void fp_log(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 static void fp_log(const char *fmt, ...)
@@ -95,20 +84,6 @@ static void fp_log(const char *fmt, ...)
 	vfprintf(stderr, fmt, ap);
 	fputc('\n', stderr);
 	va_end(ap);
-}
-
-static int signals_init(void)
-{
-	if (pipe(wake_pipe) < 0)
-		return -1;
-	fcntl(wake_pipe[1], F_SETFL, fcntl(wake_pipe[1], F_GETFL) | O_NONBLOCK);
-	struct sigaction sa;
-	memset(&sa, 0, sizeof sa);
-	sa.sa_handler = on_signal;
-	sigaction(SIGTERM, &sa, NULL);
-	sigaction(SIGINT, &sa, NULL);
-	signal(SIGPIPE, SIG_IGN);
-	return 0;
 }
 
 /* poll() timeout in ms until `at` (seconds, net_now's clock); -1 for INFINITY. */
@@ -510,7 +485,7 @@ static int main_worker(int argc, char **argv)
 		fprintf(stderr, "fakepeer: %s\n", err);
 		return 69;
 	}
-	if (signals_init() < 0) {
+	if (stop_init() < 0) {
 		perror("fakepeer: pipe");
 		return 71;
 	}
@@ -685,7 +660,7 @@ static int main_hold(int argc, char **argv)
 		fprintf(stderr, "fakepeer: --to: %s\n", err);
 		return 64;
 	}
-	if (signals_init() < 0) {
+	if (stop_init() < 0) {
 		perror("fakepeer: pipe");
 		return 71;
 	}

@@ -23,6 +23,7 @@
 
 #include "check.h"
 #include "proto/net.h"
+#include "tests/unit/rss.h"
 
 static char tool[4096];
 
@@ -249,22 +250,6 @@ static void latency(int lfd)
 	CHECK(poll(&p, 1, 5000) == 1 && read(c, &b, 1) == 0);
 	close(c);
 	proxy_stop(&px);
-}
-
-/* Resident memory of pid in KiB (Linux /proc), or -1. */
-static long rss_kib(pid_t pid)
-{
-	char path[64], line[256];
-	snprintf(path, sizeof path, "/proc/%d/status", (int)pid);
-	FILE *f = fopen(path, "r");
-	if (!f)
-		return -1;
-	long kb = -1;
-	while (fgets(line, sizeof line, f))
-		if (sscanf(line, "VmRSS: %ld", &kb) == 1)
-			break;
-	fclose(f);
-	return kb;
 }
 
 /* A server that never reads: the client stalls; the proxy holds about --max-queue-mb. */

@@ -29,6 +29,7 @@
 #include "proto/proto.h"
 #include "proto/serial.h"
 #include "scene_fixture.h"
+#include "tests/unit/rss.h"
 
 #if defined(__SANITIZE_ADDRESS__)
 #define RSS_BOUND_KIB (40 * 1024)
@@ -477,22 +478,6 @@ static void test_slow_handshake(void)
 	CHECK(got_error);
 	proto_conn_free(c);
 	worker_stop(&w);
-}
-
-/* Resident memory of process pid in KiB (Linux /proc), or -1. */
-static long rss_kib(pid_t pid)
-{
-	char path[64], line[256];
-	snprintf(path, sizeof path, "/proc/%d/status", (int)pid);
-	FILE *f = fopen(path, "r");
-	if (!f)
-		return -1;
-	long kib = -1;
-	while (fgets(line, sizeof line, f))
-		if (sscanf(line, "VmRSS: %ld", &kib) == 1)
-			break;
-	fclose(f);
-	return kib;
 }
 
 /*
