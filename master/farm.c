@@ -201,9 +201,10 @@ static void stop_accepting(struct farm *f)
 /* ---- local threads: a tile source over the scheduler ---- */
 
 struct local {
-	struct sched *s;
+	struct farm *f;
 	const struct renderer *r;
 	bool audit_only;       /* --no-local: audits, never ordinary tiles */
+	atomic_uint oom;       /* tile buffers refused in a row */
 };
 
 static int local_take(void *ctx, struct tile_work *w)
@@ -211,16 +212,24 @@ static int local_take(void *ctx, struct tile_work *w)
 	struct local *L = ctx;
 	uint32_t id;
 	bool audit;
-	if (!sched_local_take(L->s, L->audit_only, &id, &audit))
+	if (atomic_load(&L->f->local_gave_up) || !sched_local_take(L->f->s, L->audit_only, &id, &audit))
 		return 0;
-	*w = (struct tile_work){ L->r, sched_rect(L->s, id), sched_stop_flag(L->s), id, audit ? L : NULL, 0 };
+	*w = (struct tile_work){ L->r, sched_rect(L->f->s, id), sched_stop_flag(L->f->s), id, audit ? L : NULL, 0 };
 	return 1;
 }
 
 static void local_done(void *ctx, const struct tile_work *w, uint8_t **rgb, int ok)
 {
 	struct local *L = ctx;
-	sched_local_done(L->s, (uint32_t)w->id, w->ptr != NULL, *rgb, ok == 1);
+	sched_local_done(L->f->s, (uint32_t)w->id, w->ptr != NULL, *rgb, ok == 1);
+	if (ok >= 0) {
+		atomic_store(&L->oom, 0);
+	} else if (atomic_fetch_add(&L->oom, 1) + 1 >= FARM_LOCAL_OOM_MAX) {
+		/* no tile buffer, again and again: give up rather than spin (the
+		 * tile went back to the queue; a worker may still take it) */
+		atomic_store(&L->f->local_gave_up, 1);
+		ev_wake(L->f->loop);
+	}
 }
 
 /* ---- progress and summary ---- */
@@ -230,6 +239,10 @@ static void progress_draw(struct farm *f)
 	double now = net_now();
 	struct sched_stats st;
 	sched_stats(f->s, &st);
+	if (!f->farmed) {
+		progress_update(&f->bar, st.done);
+		return;
+	}
 	double el = now - f->t0;
 	char eta[32] = "?";
 	if (st.done > 0 && st.done < st.n)
@@ -264,10 +277,12 @@ static void on_progress(struct ev_loop *l, void *arg)
 
 static void summary(struct farm *f)
 {
-	if (f->tty)
+	if (f->tty && !f->farmed)
+		progress_end(&f->bar);
+	else if (f->tty)
 		fputs("\r\033[K", stderr);
-	if (f->o->quiet)
-		return;
+	if (f->o->quiet || !f->farmed)
+		return; /* a local render's summary is render.c's one line */
 	struct sched_stats st;
 	sched_stats(f->s, &st);
 	double el = net_now() - f->t0;
@@ -314,7 +329,7 @@ static void summary(struct farm *f)
 static void on_wake(struct ev_loop *l, void *arg)
 {
 	struct farm *f = arg;
-	if (atomic_load(f->cancel) || sched_finished(f->s)) {
+	if (atomic_load(f->cancel) || sched_finished(f->s) || (atomic_load(&f->local_gave_up) && !f->farmed)) {
 		sched_stop(f->s);
 		ev_stop(l);
 		return;
@@ -365,13 +380,17 @@ static uint64_t mix64(uint64_t x)
 }
 
 int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_len, double build_s,
-		const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, atomic_int *cancel)
+		const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, atomic_int *cancel,
+		uint32_t *finished)
 {
 	struct farm f;
 	memset(&f, 0, sizeof f);
 	f.o = o;
 	f.t0 = net_now();
-	f.tty = isatty(2) && !o->quiet;
+	f.tty = progress_wanted(o->quiet);
+	f.farmed = o->workers || o->workers_file || o->accept;
+	atomic_init(&f.local_gave_up, 0);
+	*finished = 0;
 	f.hb_timeout = o->heartbeat_s > 0 ? o->heartbeat_s : 10.0;
 	f.hb_interval = f.hb_timeout / 4;
 	f.scene = scene;
@@ -388,7 +407,7 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	char err[600];
 
 	uint32_t named = 0;
-	if ((o->workers || o->workers_file || !o->accept) &&
+	if ((o->workers || o->workers_file) &&
 	    (workers_parse(o->workers, o->workers_file, &addrs, &named, err, sizeof err) < 0 ||
 	     workers_expand(&addrs, &named, err, sizeof err) < 0)) {
 		fprintf(stderr, "portray-master: %s\n", err);
@@ -434,7 +453,8 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 
 	/* local threads; with --no-local one that only audits (none without audits) */
 	int n_threads = o->no_local ? (o->audit > 0) : o->threads > 0 ? o->threads : render_ncpus();
-	L = (struct local){ f.s, r, o->no_local };
+	L = (struct local){ .f = &f, .r = r, .audit_only = o->no_local };
+	atomic_init(&L.oom, 0);
 	struct tile_source src = { local_take, local_done, &L };
 	for (uint32_t i = 0; i < f.n_w; i++)
 		worker_start(&f.w[i]);
@@ -443,6 +463,7 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 		goto out;
 	}
 	if (f.tty) {
+		progress_init(&f.bar, f.tg.n, true);
 		ev_timer_init(&f.progress, on_progress, &f);
 		ev_timer_arm(f.loop, &f.progress, net_now() + 0.25);
 	}
@@ -459,7 +480,10 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	summary(&f);
 	struct sched_stats st;
 	sched_stats(f.s, &st);
-	if (rc == EXIT_NO_WORKERS)
+	*finished = st.done;
+	if (rc == 0 && st.done < st.n && atomic_load(&f.local_gave_up))
+		rc = ERRLEVEL_LEVEL2; /* render.c writes what there is and says why */
+	else if (rc == EXIT_NO_WORKERS)
 		fprintf(stderr,
 			"portray-master: every worker is lost and --no-local forbids rendering here: %u of %u tiles done\n",
 			st.done, st.n);

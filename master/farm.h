@@ -14,8 +14,10 @@
 /*
  * Renders the encoded scene (scene_len bytes, proto_scene_encode) at w x h
  * into image (w*h*3 bytes, RGB8, rows top to bottom) on the workers named in
- * o (-w, --workers-file), with local threads (o->threads) joining in unless
- * o->no_local. r must be built from the decoding of those very bytes (one
+ * o (-w, --workers-file, --accept), with local threads (o->threads) joining
+ * in unless o->no_local. With no workers named and no --accept it is the
+ * local render: the same loop, scheduler and tile pool with the local
+ * threads alone (never a second renderer). *finished: the tiles stored. r must be built from the decoding of those very bytes (one
  * road for pixels: what the master traces is what the workers trace), for w
  * x h; build_s is how long that build took (the workers' build deadline
  * follows it). Every pixel is the same as a local render's: worker tiles are
@@ -27,11 +29,13 @@
  * tiles without results far past its usual tile time is dropped. Stops early
  * when *cancel becomes non-zero (unfinished tiles stay as they were in
  * image). Farm faults go to stderr always; progress and a summary unless
- * o->quiet. Returns 0 on success, or an exit code (EXIT_NO_WORKERS when
+ * o->quiet. Returns 0 on success, ERRLEVEL_LEVEL2 when the local threads
+ * found no memory for their tiles (what was done is in image), or an exit code (EXIT_NO_WORKERS when
  * --no-local and every worker is lost, EXIT_USAGE for a bad worker list or
  * secret file) after printing a message on stderr.
  */
 int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_len, double build_s,
-		const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, atomic_int *cancel);
+		const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, atomic_int *cancel,
+		uint32_t *finished);
 
 #endif

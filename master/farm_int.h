@@ -10,6 +10,7 @@
 #include <stdint.h>
 
 #include "master/farm.h"
+#include "master/progress.h"
 #include "master/sched.h"
 #include "master/workers.h"
 #include "proto/evloop.h"
@@ -37,6 +38,8 @@
 #define FARM_BUILD_HB 10.0
 /* ... plus this many times the master's own build of the same scene */
 #define FARM_BUILD_LOCAL 20.0
+/* local tile buffers refused in a row before the local threads give up */
+#define FARM_LOCAL_OOM_MAX 16
 
 enum wstate {
 	W_IDLE,       /* not connected (waiting for a retry, or dropped) */
@@ -126,6 +129,9 @@ struct farm {
 	double build_s;         /* the master's own build of the scene (the workers' build deadline) */
 	atomic_int *cancel;
 	bool tty;
+	bool farmed;            /* workers named or --accept: else the local threads alone */
+	atomic_int local_gave_up; /* the local threads found no memory for tiles */
+	struct progress bar;    /* the bar of a render without workers */
 	double t0;
 	struct ev_timer progress;
 	uint32_t invalid_results;

@@ -225,34 +225,25 @@ int master_render(const struct master_opts *o)
 	atomic_init(&cancel, 0);
 	interrupt_start(&cancel, !ds->image.nonstop);
 	watching = true;
-	uint64_t total = render_tile_count(w, h, o->tile), finished = 0;
+	uint64_t total = render_tile_count(w, h, o->tile);
+	uint32_t finished = 0;
 	int threads = o->threads > 0 ? o->threads : render_ncpus();
 	bool farm = o->workers || o->workers_file || o->accept;
-	if (farm) {
-		rc = farm_render(o, enc, enc_len, t_build - t_parse, r, w, h, image, &cancel);
-		if (rc && !atomic_load(&cancel))
-			goto done; /* farm_render said why */
-		rc = 0;
-	} else {
-		struct progress prog;
-		progress_init(&prog, total, progress_wanted(o->quiet));
-		struct render_progress cb = { progress_callback, &prog };
-		finished = render_image(r, threads, o->tile, image, &cb, &cancel);
-		progress_end(&prog);
-	}
+	/* one loop for every render: without workers it drives the local threads alone */
+	rc = farm_render(o, enc, enc_len, t_build - t_parse, r, w, h, image, &cancel, &finished);
+	if (rc && rc != ERRLEVEL_LEVEL2 && !atomic_load(&cancel))
+		goto done; /* farm_render said why */
+	rc = 0;
 	double t_render = progress_now();
-	bool partial = farm ? atomic_load(&cancel) != 0 : finished < total;
+	bool partial = finished < total;
 
 	char partial_why[160] = "", bufs[4][512];
 	if (partial) {
 		const char *how = interrupt_reason() == INTERRUPT_KEY ? "stopped" : "interrupted";
 		if (!atomic_load(&cancel))
 			how = "out of memory";
-		if (farm && atomic_load(&cancel))
-			snprintf(partial_why, sizeof partial_why, "%s", how);
-		else
-			snprintf(partial_why, sizeof partial_why, "%s, %llu of %llu tiles", how,
-				 (unsigned long long)finished, (unsigned long long)total);
+		snprintf(partial_why, sizeof partial_why, "%s, %llu of %llu tiles", how, (unsigned long long)finished,
+			 (unsigned long long)total);
 	}
 	struct img_text texts[4];
 	struct img_desc desc = { .w = w, .h = h, .type = IMG_RGB8, .pixels = image, .format = fmt, .text = texts };
@@ -270,12 +261,9 @@ int master_render(const struct master_opts *o)
 		rc = ERRLEVEL_LEVEL2;
 	} else if (partial) {
 		const char *why = interrupt_reason() == INTERRUPT_KEY ? "stopped" : "interrupted";
-		if (farm)
-			fprintf(stderr, "portray-master: %s: partial image written to %s\n", why, shown(out));
-		else
-			fprintf(stderr, "portray-master: %s: %llu of %llu tiles (%d%%) written to %s\n", why,
-				(unsigned long long)finished, (unsigned long long)total,
-				(int)(100 * finished / total), shown(out));
+		fprintf(stderr, "portray-master: %s: %llu of %llu tiles (%d%%) written to %s\n", why,
+			(unsigned long long)finished, (unsigned long long)total, (int)(100 * finished / total),
+			shown(out));
 		rc = interrupt_reason() == INTERRUPT_SIGNAL ? EXIT_INTERRUPTED : 0;
 	} else if (!o->quiet && !farm) {
 		double tr = t_render - t_build;
