@@ -324,11 +324,31 @@ static void summary(struct farm *f)
 
 /* ---- the loop ---- */
 
+int farm_observe(struct farm *f, const struct farm_observer *o)
+{
+	if (f->n_obs == FARM_OBSERVERS_MAX || sched_observe(f->s) < 0)
+		return -1;
+	f->obs[f->n_obs++] = *o;
+	return 0;
+}
+
+/* Tells the observers which tiles changed. */
+static void observe_changes(struct farm *f)
+{
+	uint32_t ids[256], n;
+	if (f->n_obs == 0)
+		return;
+	while ((n = sched_changes(f->s, ids, 256)) > 0)
+		for (uint32_t i = 0; i < f->n_obs; i++)
+			f->obs[i].tiles(f->obs[i].arg, f, ids, n);
+}
+
 /* The scheduler or an interrupt has news: the render ended, a worker was
  * caught (its tiles are back in the queue), or we are cancelled. */
 static void on_wake(struct ev_loop *l, void *arg)
 {
 	struct farm *f = arg;
+	observe_changes(f);
 	if (atomic_load(f->cancel) || sched_finished(f->s) || (atomic_load(&f->local_gave_up) && !f->farmed)) {
 		sched_stop(f->s);
 		ev_stop(l);
@@ -474,6 +494,7 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	sched_stop(f.s);
 	tile_pool_join(pool);
 	pool = NULL;
+	observe_changes(&f); /* the last tiles, and those finished while stopping */
 	farm_bye(&f);
 	if (f.tty)
 		progress_draw(&f);

@@ -55,6 +55,15 @@ enum wstate {
 
 struct farm;
 
+/* Something that watches the render from the loop: the live view, the journal. */
+struct farm_observer {
+	/* Tiles stored, or undone because their worker was caught lying, since
+	 * the last call (sched_changes; read them with sched_tile_pixels). */
+	void (*tiles)(void *arg, struct farm *f, const uint32_t *ids, uint32_t n);
+	void *arg;
+};
+#define FARM_OBSERVERS_MAX 4
+
 struct worker {
 	struct farm *f;
 	struct worker_addr addr;
@@ -135,6 +144,8 @@ struct farm {
 	double t0;
 	struct ev_timer progress;
 	uint32_t invalid_results;
+	struct farm_observer obs[FARM_OBSERVERS_MAX];
+	uint32_t n_obs;
 	int rc;                 /* the loop's verdict */
 };
 
@@ -148,6 +159,8 @@ void farm_log_limited(struct farm *f, const char *fmt, ...) __attribute__((forma
 /* Whether the render can go on: ends the loop (rc EXIT_NO_WORKERS) when
  * --no-local and no worker is left. */
 void farm_check_alive(struct farm *f);
+/* Adds an observer (before the loop runs). 0, or -1 when out of room or memory. */
+int farm_observe(struct farm *f, const struct farm_observer *o);
 
 /* wconn.c */
 int worker_init(struct farm *f, struct worker *w, const struct worker_addr *a, uint16_t index);

@@ -17,6 +17,7 @@ struct ftile {
 	uint8_t queued;        /* in the pending queue */
 	uint8_t audit_queued;  /* in the audit queue */
 	uint8_t taken;         /* handed out before: taking it again is a redispatch */
+	uint8_t changed;       /* in the change list (sched_changes) */
 	uint16_t holder[2];    /* who traces it now (SCHED_NONE = free slot) */
 	uint16_t by;           /* who wrote the stored pixels (when done) */
 	uint16_t claim_by;     /* who delivered claim */
@@ -40,6 +41,8 @@ struct sched {
 	uint32_t n_order, order_head; /* order[0..order_head) are done (distrust resets it) */
 	uint32_t *audits;      /* tile ids with a claim to re-render: ring of n */
 	uint32_t a_head, a_len;
+	uint32_t *changes;     /* tiles stored or undone since sched_changes last ran: ring of n, or NULL */
+	uint32_t c_head, c_len;
 	struct trust *trust;   /* per worker */
 	uint32_t n_workers;
 	struct sched_stats st;
@@ -57,6 +60,18 @@ static void wake_loop(struct sched *s)
 {
 	if (s->wake)
 		s->wake(s->wake_arg);
+}
+
+/* Tile id was stored or undone: an observer may want to know (sched_changes). */
+static void changed_locked(struct sched *s, uint32_t id)
+{
+	struct ftile *t = &s->t[id];
+	if (!s->changes || t->changed)
+		return;
+	t->changed = 1;
+	s->changes[(s->c_head + s->c_len) % s->tg.n] = id;
+	if (s->c_len++ == 0)
+		wake_loop(s);
 }
 
 static bool holds(const struct ftile *t, uint16_t who) { return t->holder[0] == who || t->holder[1] == who; }
@@ -132,6 +147,7 @@ void sched_free(struct sched *s)
 	free(s->queue);
 	free(s->order);
 	free(s->audits);
+	free(s->changes);
 	free(s->trust);
 	free(s);
 }
@@ -219,6 +235,7 @@ static void store_locked(struct sched *s, uint32_t id, uint16_t who, const uint8
 	t->done = 1;
 	t->by = who;
 	s->st.done++;
+	changed_locked(s, id);
 	if (s->st.done == s->tg.n) {
 		atomic_store(&s->stop, 1);
 		pthread_cond_broadcast(&s->cv);
@@ -243,6 +260,7 @@ static void distrust_locked(struct sched *s, uint16_t who, uint32_t tile)
 			t->done = 0;
 			t->by = SCHED_NONE;
 			s->st.done--;
+			changed_locked(s, i);
 			tr->requeued++;
 			requeue_locked(s, i);
 		} else if (t->claim && t->claim_by == who) {
@@ -477,6 +495,12 @@ void sched_stop(struct sched *s)
 
 atomic_int *sched_stop_flag(struct sched *s) { return &s->stop; }
 
+uint32_t sched_bpp(const struct sched *s)
+{
+	(void)s;
+	return 3; /* RGB8 */
+}
+
 bool sched_finished(struct sched *s)
 {
 	pthread_mutex_lock(&s->mu);
@@ -490,4 +514,66 @@ void sched_stats(struct sched *s, struct sched_stats *out)
 	pthread_mutex_lock(&s->mu);
 	*out = s->st;
 	pthread_mutex_unlock(&s->mu);
+}
+
+/* ---- observers ---- */
+
+int sched_observe(struct sched *s)
+{
+	pthread_mutex_lock(&s->mu);
+	if (!s->changes)
+		s->changes = calloc(s->tg.n, sizeof *s->changes);
+	int rc = s->changes ? 0 : -1;
+	pthread_mutex_unlock(&s->mu);
+	return rc;
+}
+
+uint32_t sched_changes(struct sched *s, uint32_t *ids, uint32_t max)
+{
+	pthread_mutex_lock(&s->mu);
+	uint32_t n = 0;
+	for (; n < max && s->c_len > 0; n++) {
+		ids[n] = s->changes[s->c_head];
+		s->t[ids[n]].changed = 0;
+		s->c_head = (s->c_head + 1) % s->tg.n;
+		s->c_len--;
+	}
+	pthread_mutex_unlock(&s->mu);
+	return n;
+}
+
+bool sched_tile_pixels(struct sched *s, uint32_t id, uint8_t *out)
+{
+	pthread_mutex_lock(&s->mu);
+	bool done = s->t[id].done;
+	if (done) {
+		struct tile_rect r = tiling_rect(&s->tg, id);
+		for (uint32_t y = 0; y < r.h; y++)
+			memcpy(out + (size_t)y * r.w * 3, s->image + (((size_t)(r.y + y) * s->tg.w) + r.x) * 3,
+			       (size_t)r.w * 3);
+	}
+	pthread_mutex_unlock(&s->mu);
+	return done;
+}
+
+int sched_preload(struct sched *s, uint32_t id, const uint8_t *rgb)
+{
+	pthread_mutex_lock(&s->mu);
+	struct ftile *t = &s->t[id];
+	int rc = -1;
+	if (!t->done && t->queued && !t->taken) {
+		/* out of the queue (it is a ring: rebuild it without id) */
+		uint32_t k = 0;
+		for (uint32_t i = 0; i < s->q_len; i++) {
+			uint32_t q = s->queue[(s->q_head + i) % s->tg.n];
+			if (q != id)
+				s->queue[(s->q_head + k++) % s->tg.n] = q;
+		}
+		s->q_len = k;
+		t->queued = 0;
+		store_locked(s, id, SCHED_NONE, rgb);
+		rc = 0;
+	}
+	pthread_mutex_unlock(&s->mu);
+	return rc;
 }

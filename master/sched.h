@@ -115,6 +115,25 @@ void sched_stop(struct sched *s);
 /* The flag local tiles watch to abandon their work (set by sched_stop). */
 atomic_int *sched_stop_flag(struct sched *s);
 bool sched_finished(struct sched *s);
+/* Bytes a pixel of the image and of every tile's pixels. */
+uint32_t sched_bpp(const struct sched *s);
 void sched_stats(struct sched *s, struct sched_stats *out);
+
+/* ---- observers (the live view, the journal): what changed, and its pixels ---- */
+
+/* From now on, keep a list of the tiles stored, or undone (their worker was
+ * caught lying), and wake the loop when it turns non-empty. 0, or -1 when
+ * out of memory. */
+int sched_observe(struct sched *s);
+/* Moves up to max tile ids from that list into ids (each once however often
+ * it changed; look at its pixels to see what it is now). Returns how many. */
+uint32_t sched_changes(struct sched *s, uint32_t *ids, uint32_t max);
+/* Copies tile id's stored pixels (rect w*h*3 bytes, rows top to bottom)
+ * into out and returns true, or returns false when the tile is not done. */
+bool sched_tile_pixels(struct sched *s, uint32_t id, uint8_t *out);
+/* Before anything is taken: tile id is done already with pixels rgb (a
+ * resumed render). 0, or -1 when it was not pending. Preloading the last
+ * tile finishes the render. */
+int sched_preload(struct sched *s, uint32_t id, const uint8_t *rgb);
 
 #endif
