@@ -136,9 +136,36 @@ static void eye_block(const struct renderer *r, const uint32_t px[4], const uint
 		out[k] = ok[k] ? shade_eye_hit(r->shade, &u[k], hit[k] ? &h[k] : NULL, seed[k]) : v3(0, 0, 0);
 }
 
+/* Stores a filter colour as one pixel of a type (enum render_pixel). */
+struct pixel_store {
+	size_t bpp;
+	void (*put)(vec3 c, uint8_t *out);
+};
+
+static void put_rgb8(vec3 c, uint8_t *out) { filter_quantise(c, out); }
+
+static void put_le_float(double v, uint8_t *out)
+{
+	float f = (float)v;
+	uint32_t u;
+	memcpy(&u, &f, sizeof u);
+	out[0] = (uint8_t)u;
+	out[1] = (uint8_t)(u >> 8);
+	out[2] = (uint8_t)(u >> 16);
+	out[3] = (uint8_t)(u >> 24);
+}
+
+static void put_rgbf32(vec3 c, uint8_t *out)
+{
+	put_le_float(c.x, out);
+	put_le_float(c.y, out + 4);
+	put_le_float(c.z, out + 8);
+}
+
 /* renderer_tile_cancellable for a filter_single_ray chain, in 2x2 blocks;
  * stops at the first block that finds the thread's cancel flag set. */
-static void tile_blocks(const struct renderer *r, struct tile_rect t, uint8_t *rgb, uint64_t *rays)
+static void tile_blocks(const struct renderer *r, struct tile_rect t, const struct pixel_store *ps, uint8_t *rgb,
+			uint64_t *rays)
 {
 	for (uint32_t j = 0; j < t.h; j += 2) {
 		for (uint32_t i = 0; i < t.w; i += 2) {
@@ -152,9 +179,9 @@ static void tile_blocks(const struct renderer *r, struct tile_rect t, uint8_t *r
 				if (ii >= t.w || jj >= t.h)
 					continue;
 				uint64_t x = (uint64_t)t.x + ii, y = (uint64_t)t.y + jj;
-				uint8_t *p = rgb + ((size_t)jj * t.w + ii) * 3;
+				uint8_t *p = rgb + ((size_t)jj * t.w + ii) * ps->bpp;
 				if (x >= r->w || y >= r->h) {
-					memset(p, 0, 3);
+					memset(p, 0, ps->bpp);
 					continue;
 				}
 				px[n] = (uint32_t)x;
@@ -166,7 +193,7 @@ static void tile_blocks(const struct renderer *r, struct tile_rect t, uint8_t *r
 			vec3 c[4];
 			eye_block(r, px, py, n, c);
 			for (int k = 0; k < n; k++)
-				filter_quantise(c[k], dst[k]);
+				ps->put(c[k], dst[k]);
 			*rays += (uint64_t)n;
 		}
 	}
@@ -174,21 +201,22 @@ static void tile_blocks(const struct renderer *r, struct tile_rect t, uint8_t *r
 
 /* renderer_tile_cancellable for any other chain, pixel by pixel; stops at
  * the first pixel that finds the thread's cancel flag set. */
-static void tile_pixels(const struct renderer *r, struct tile_rect t, uint8_t *rgb, uint64_t *rays)
+static void tile_pixels(const struct renderer *r, struct tile_rect t, const struct pixel_store *ps, uint8_t *rgb,
+			uint64_t *rays)
 {
 	struct filter_scratch *scratch = filter_scratch_new(&r->fc); /* NULL: no cache, same colours */
 	for (uint32_t j = 0; j < t.h; j++) {
-		uint8_t *row = rgb + (size_t)j * t.w * 3;
+		uint8_t *row = rgb + (size_t)j * t.w * ps->bpp;
 		for (uint32_t i = 0; i < t.w; i++) {
 			if (cancel_poll())
 				goto out;
 			uint64_t x = (uint64_t)t.x + i, y = (uint64_t)t.y + j;
 			if (x >= r->w || y >= r->h) {
-				memset(row + (size_t)i * 3, 0, 3);
+				memset(row + (size_t)i * ps->bpp, 0, ps->bpp);
 				continue;
 			}
 			vec3 c = filter_pixel(&r->fc, scratch, (uint32_t)x, (uint32_t)y, trace_shade, (void *)r, rays);
-			filter_quantise(c, row + (size_t)i * 3);
+			ps->put(c, row + (size_t)i * ps->bpp);
 		}
 	}
 out:
@@ -204,22 +232,30 @@ out:
  * saw the flag is wrong, so the tile is complete only when no poll did:
  * then every pixel is exactly what a run without a flag gives.
  */
-int renderer_tile_cancellable(const struct renderer *r, struct tile_rect t, uint8_t *rgb,
-			      atomic_int *cancel)
+int renderer_tile_px(const struct renderer *r, struct tile_rect t, enum render_pixel px, uint8_t *rgb,
+		     atomic_int *cancel)
 {
+	static const struct pixel_store stores[2] = { [RENDER_RGB8] = { 3, put_rgb8 },
+						      [RENDER_RGBF32] = { 12, put_rgbf32 } };
+	const struct pixel_store *ps = &stores[px == RENDER_RGBF32];
 	struct cancel_scope saved;
 	cancel_enter(cancel, &saved);
 	uint64_t rays = 0;
 	if (filter_single_ray(&r->fc))
-		tile_blocks(r, t, rgb, &rays);
+		tile_blocks(r, t, ps, rgb, &rays);
 	else
-		tile_pixels(r, t, rgb, &rays);
+		tile_pixels(r, t, ps, rgb, &rays);
 	int complete = !cancel_seen();
 	cancel_leave(&saved);
 	/* the counter is statistics only: casting away const is safe, r was
 	 * allocated non-const by renderer_new */
 	atomic_fetch_add_explicit(&((struct renderer *)r)->rays, rays, memory_order_relaxed);
 	return complete;
+}
+
+int renderer_tile_cancellable(const struct renderer *r, struct tile_rect t, uint8_t *rgb, atomic_int *cancel)
+{
+	return renderer_tile_px(r, t, RENDER_RGB8, rgb, cancel);
 }
 
 void renderer_tile(const struct renderer *r, struct tile_rect t, uint8_t *rgb)

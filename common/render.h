@@ -56,6 +56,21 @@ int renderer_set_size(struct renderer *r, uint32_t w, uint32_t h);
 #define RENDER_PIXEL_REV 2
 
 /*
+ * What a tile's pixels are: chosen per render from the output format (the
+ * master's) and carried by the farm's wire as they are, so a pixel's bytes
+ * are the same on every host, thread, tile size and worker.
+ *   RENDER_RGB8:   3 bytes, the filter's colour clamped and rounded
+ *                  (filter_quantise): what 8-bit PNG and PPM hold.
+ *   RENDER_RGBF32: 12 bytes, the filter's colour before clamping, each
+ *                  channel converted once from double to float (nearest)
+ *                  and stored little-endian whatever the host: for 16-bit
+ *                  PNG, PFM and OpenEXR (values below 0 and above 1 kept).
+ */
+enum render_pixel { RENDER_RGB8 = 0, RENDER_RGBF32 = 1 };
+#define RENDER_PIXEL_MAX_BYTES 12
+static inline uint32_t render_pixel_bytes(enum render_pixel px) { return px == RENDER_RGBF32 ? 12u : 3u; }
+
+/*
  * Renders one tile into rgb (t.w*t.h*3 bytes, rows top to bottom). Pixels of
  * the rectangle outside the image are written black. Thread-safe.
  */
@@ -72,6 +87,10 @@ void renderer_tile(const struct renderer *r, struct tile_rect t, uint8_t *rgb);
  */
 int renderer_tile_cancellable(const struct renderer *r, struct tile_rect t, uint8_t *rgb,
 			      atomic_int *cancel);
+/* renderer_tile_cancellable with pixels of type px: out holds t.w * t.h *
+ * render_pixel_bytes(px) bytes (black is all zero bytes in either type). */
+int renderer_tile_px(const struct renderer *r, struct tile_rect t, enum render_pixel px, uint8_t *out,
+		     atomic_int *cancel);
 
 /* Eye rays traced by this renderer so far, over all threads (for Mrays/s). */
 uint64_t renderer_rays(const struct renderer *r);

@@ -51,7 +51,7 @@ static void *pool_thread(void *arg)
 	size_t cap = 0;
 	struct tile_work w;
 	while (src->take(src->ctx, &w)) {
-		size_t need = (size_t)w.rect.w * w.rect.h * 3;
+		size_t need = (size_t)w.rect.w * w.rect.h * render_pixel_bytes(w.px);
 		if (need > cap || !buf) {
 			free(buf);
 			cap = need;
@@ -64,7 +64,7 @@ static void *pool_thread(void *arg)
 		}
 		struct timespec t0, t1;
 		clock_gettime(CLOCK_MONOTONIC, &t0);
-		int ok = renderer_tile_cancellable(w.r, w.rect, buf, w.cancel);
+		int ok = renderer_tile_px(w.r, w.rect, w.px, buf, w.cancel);
 		clock_gettime(CLOCK_MONOTONIC, &t1);
 		w.trace_s = (double)(t1.tv_sec - t0.tv_sec) + (t1.tv_nsec - t0.tv_nsec) * 1e-9;
 		src->done(src->ctx, &w, &buf, ok);
@@ -144,7 +144,7 @@ static int image_take(void *ctx, struct tile_work *w)
 	uint64_t k = atomic_fetch_add(&s->next, 1);
 	if (k >= s->tg.n)
 		return 0;
-	*w = (struct tile_work){ s->r, tiling_rect(&s->tg, (uint32_t)k), s->cancel, k, NULL, 0 };
+	*w = (struct tile_work){ s->r, tiling_rect(&s->tg, (uint32_t)k), s->cancel, k, NULL, 0, RENDER_RGB8 };
 	return 1;
 }
 

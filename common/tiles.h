@@ -21,7 +21,8 @@
  * workers near the end of a render, large enough that the per-tile cost
  * (a message each way on the farm) stays a few percent */
 #define TILE_DEFAULT 32u
-/* the largest side: a 1024x1024 tile is 3 MiB of RGB, one wire frame */
+/* the largest side: a 1024x1024 tile is 3 MiB of RGB8 (12 MiB of RGBF32),
+ * one wire frame */
 #define TILE_MAX_SIDE 1024u
 
 /* An image cut into square tiles of side `side`, row-major, the last
@@ -44,6 +45,7 @@ struct tile_work {
 	uint64_t id;            /* the source's own: tile index, ... */
 	void *ptr;              /* the source's own: job, ... */
 	double trace_s;         /* set by the pool before done: wall time spent tracing */
+	enum render_pixel px;   /* the pixels wanted (render.h); 0 is RENDER_RGB8 */
 };
 
 /* Where a pool's tiles come from and where their pixels go. */
@@ -57,7 +59,8 @@ struct tile_source {
 	int (*take)(void *ctx, struct tile_work *w);
 	/*
 	 * After tracing w: ok 1 when *rgb holds the whole tile (w->rect.w *
-	 * w->rect.h * 3 bytes, rows top to bottom), 0 when it was abandoned
+	 * w->rect.h * render_pixel_bytes(w->px) bytes, rows top to bottom,
+	 * kept as bytes whatever the type), 0 when it was abandoned
 	 * (cancelled), -1 when no buffer could be allocated. done may keep
 	 * the buffer by setting *rgb = NULL (the pool allocates another).
 	 */

@@ -214,7 +214,8 @@ static int local_take(void *ctx, struct tile_work *w)
 	bool audit;
 	if (atomic_load(&L->f->local_gave_up) || !sched_local_take(L->f->s, L->audit_only, &id, &audit))
 		return 0;
-	*w = (struct tile_work){ L->r, sched_rect(L->f->s, id), sched_stop_flag(L->f->s), id, audit ? L : NULL, 0 };
+	*w = (struct tile_work){ L->r, sched_rect(L->f->s, id), sched_stop_flag(L->f->s), id, audit ? L : NULL, 0,
+				 L->f->px };
 	return 1;
 }
 
@@ -400,8 +401,8 @@ static uint64_t mix64(uint64_t x)
 }
 
 int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_len, double build_s,
-		const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, atomic_int *cancel,
-		uint32_t *finished)
+		const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, enum render_pixel px,
+		atomic_int *cancel, uint32_t *finished)
 {
 	struct farm f;
 	memset(&f, 0, sizeof f);
@@ -418,6 +419,7 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	f.build_s = build_s;
 	f.width = w;
 	f.height = h;
+	f.px = px;
 	f.cancel = cancel;
 	f.lfd = -1;
 	int rc = EXIT_USAGE;
@@ -455,7 +457,7 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 		salt = mix64((uint64_t)getpid() ^ (uint64_t)(net_now() * 1e9));
 	f.cap_w = named + (o->accept ? FARM_ACCEPT_MAX * 4 : 0);
 	f.loop = ev_new();
-	f.s = f.loop ? sched_new(&f.tg, f.cap_w, image, o->audit, salt, wake_loop, &f) : NULL;
+	f.s = f.loop ? sched_new(&f.tg, render_pixel_bytes(px), f.cap_w, image, o->audit, salt, wake_loop, &f) : NULL;
 	f.w = calloc(f.cap_w, sizeof *f.w);
 	if (!f.loop || !f.s || !f.w) {
 		fprintf(stderr, "portray-master: out of memory for %u tiles\n", f.tg.n);

@@ -13,7 +13,8 @@
 
 /*
  * Renders the encoded scene (scene_len bytes, proto_scene_encode) at w x h
- * into image (w*h*3 bytes, RGB8, rows top to bottom) on the workers named in
+ * into image (w*h*render_pixel_bytes(px) bytes, pixels of type px as
+ * render.h states them, rows top to bottom) on the workers named in
  * o (-w, --workers-file, --accept), with local threads (o->threads) joining
  * in unless o->no_local. With no workers named and no --accept it is the
  * local render: the same loop, scheduler and tile pool with the local
@@ -35,7 +36,7 @@
  * secret file) after printing a message on stderr.
  */
 int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_len, double build_s,
-		const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, atomic_int *cancel,
-		uint32_t *finished);
+		const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, enum render_pixel px,
+		atomic_int *cancel, uint32_t *finished);
 
 #endif

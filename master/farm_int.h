@@ -132,6 +132,7 @@ struct farm {
 	size_t scene_len;
 	uint8_t hash[PROTO_HASH_BYTES];
 	uint32_t width, height;
+	enum render_pixel px;   /* the pixels of every tile, local or on the wire */
 	uint8_t *secret;
 	size_t secret_len;
 	double hb_timeout, hb_interval;

@@ -150,6 +150,33 @@ static size_t output_texts(const struct master_opts *o, double seconds, const ch
 	return n;
 }
 
+/* The pixels a format wants: the renderer's values before clamping for the
+ * formats that can hold more than 8 bits (16-bit PNG, PFM, OpenEXR), its
+ * 8-bit bytes for the others. */
+static enum render_pixel pixel_for(enum img_format fmt)
+{
+	return fmt == IMG_PNG || fmt == IMG_PPM ? RENDER_RGB8 : RENDER_RGBF32;
+}
+
+/* RENDER_RGBF32 pixels are little-endian floats on every host; the writers
+ * take the host's floats (img.h): on a big-endian host, swap in place. */
+static void floats_to_host(uint8_t *p, size_t n_floats)
+{
+	const uint32_t one = 1;
+	uint8_t first;
+	memcpy(&first, &one, 1);
+	if (first == 1)
+		return; /* little-endian: they are the host's already */
+	for (size_t i = 0; i < n_floats; i++, p += 4) {
+		uint8_t t = p[0];
+		p[0] = p[3];
+		p[3] = t;
+		t = p[1];
+		p[1] = p[2];
+		p[2] = t;
+	}
+}
+
 int master_render(const struct master_opts *o)
 {
 	struct scene *s = NULL, *ds = NULL;
@@ -214,7 +241,8 @@ int master_render(const struct master_opts *o)
 	renderer_size(r, &w, &h);
 	double t_build = progress_now();
 
-	image = calloc((size_t)w * h, 3); /* unfinished pixels stay black */
+	enum render_pixel px = pixel_for(fmt);
+	image = calloc((size_t)w * h, render_pixel_bytes(px)); /* unfinished pixels stay black (0 or 0.0f) */
 	if (!image) {
 		fprintf(stderr, "portray-master: out of memory for a %ux%u image\n", w, h);
 		rc = ERRLEVEL_FATAL;
@@ -230,7 +258,7 @@ int master_render(const struct master_opts *o)
 	int threads = o->threads > 0 ? o->threads : render_ncpus();
 	bool farm = o->workers || o->workers_file || o->accept;
 	/* one loop for every render: without workers it drives the local threads alone */
-	rc = farm_render(o, enc, enc_len, t_build - t_parse, r, w, h, image, &cancel, &finished);
+	rc = farm_render(o, enc, enc_len, t_build - t_parse, r, w, h, image, px, &cancel, &finished);
 	if (rc && rc != ERRLEVEL_LEVEL2 && !atomic_load(&cancel))
 		goto done; /* farm_render said why */
 	rc = 0;
@@ -246,7 +274,10 @@ int master_render(const struct master_opts *o)
 			 (unsigned long long)total);
 	}
 	struct img_text texts[4];
-	struct img_desc desc = { .w = w, .h = h, .type = IMG_RGB8, .pixels = image, .format = fmt, .text = texts };
+	if (px == RENDER_RGBF32)
+		floats_to_host(image, (size_t)w * h * 3);
+	struct img_desc desc = { .w = w, .h = h, .type = px == RENDER_RGBF32 ? IMG_RGBF32 : IMG_RGB8,
+				 .pixels = image, .format = fmt, .text = texts };
 	desc.n_text = output_texts(o, t_render - t0, partial ? partial_why : NULL, texts, bufs);
 	if (img_write_opts(out, &desc) < 0) {
 		fprintf(stderr, "portray-master: cannot write %s: %s\n", shown(out), strerror(errno));

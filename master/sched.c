@@ -47,6 +47,7 @@ struct sched {
 	uint32_t n_workers;
 	struct sched_stats st;
 	uint8_t *image;
+	uint32_t bpp;          /* bytes a pixel */
 	double audit;
 	uint64_t salt;
 	double now;            /* the latest time sched_take was given: local takes
@@ -97,10 +98,10 @@ static void holder_del(struct ftile *t, uint16_t who)
 		t->holder[1] = SCHED_NONE;
 }
 
-struct sched *sched_new(const struct tiling *tg, uint32_t n_workers, uint8_t *image, double audit, uint64_t salt,
-			void (*wake)(void *), void *wake_arg)
+struct sched *sched_new(const struct tiling *tg, uint32_t bpp, uint32_t n_workers, uint8_t *image, double audit,
+			uint64_t salt, void (*wake)(void *), void *wake_arg)
 {
-	if (n_workers > SCHED_MAX_WORKERS || tg->n == 0)
+	if (n_workers > SCHED_MAX_WORKERS || tg->n == 0 || bpp == 0)
 		return NULL;
 	struct sched *s = calloc(1, sizeof *s);
 	if (!s)
@@ -127,6 +128,7 @@ struct sched *sched_new(const struct tiling *tg, uint32_t n_workers, uint8_t *im
 	s->st.n = n;
 	s->n_workers = n_workers;
 	s->image = image;
+	s->bpp = bpp;
 	s->audit = audit;
 	s->salt = salt;
 	s->wake = wake;
@@ -229,9 +231,10 @@ static void store_locked(struct sched *s, uint32_t id, uint16_t who, const uint8
 {
 	struct ftile *t = &s->t[id];
 	struct tile_rect r = tiling_rect(&s->tg, id);
+	size_t bpp = s->bpp;
 	for (uint32_t y = 0; y < r.h; y++)
-		memcpy(s->image + (((size_t)(r.y + y) * s->tg.w) + r.x) * 3, rgb + (size_t)y * r.w * 3,
-		       (size_t)r.w * 3);
+		memcpy(s->image + (((size_t)(r.y + y) * s->tg.w) + r.x) * bpp, rgb + (size_t)y * r.w * bpp,
+		       (size_t)r.w * bpp);
 	t->done = 1;
 	t->by = who;
 	s->st.done++;
@@ -284,7 +287,7 @@ static bool trusted_locked(struct sched *s, uint32_t id, const uint8_t *rgb)
 		struct tile_rect r = tiling_rect(&s->tg, id);
 		t->claim = NULL;
 		s->st.audits++;
-		if (memcmp(claim, rgb, (size_t)r.w * r.h * 3) != 0) {
+		if (memcmp(claim, rgb, (size_t)r.w * r.h * s->bpp) != 0) { /* bit-exact, floats too */
 			s->st.audit_failed++;
 			distrust_locked(s, t->claim_by, id);
 		}
@@ -314,7 +317,7 @@ static bool claim_locked(struct sched *s, uint32_t id, uint16_t who, const uint8
 {
 	struct ftile *t = &s->t[id];
 	struct tile_rect r = tiling_rect(&s->tg, id);
-	size_t n = (size_t)r.w * r.h * 3;
+	size_t n = (size_t)r.w * r.h * s->bpp;
 	uint8_t *copy = malloc(n);
 	if (!copy)
 		return false;
@@ -495,11 +498,7 @@ void sched_stop(struct sched *s)
 
 atomic_int *sched_stop_flag(struct sched *s) { return &s->stop; }
 
-uint32_t sched_bpp(const struct sched *s)
-{
-	(void)s;
-	return 3; /* RGB8 */
-}
+uint32_t sched_bpp(const struct sched *s) { return s->bpp; }
 
 bool sched_finished(struct sched *s)
 {
@@ -548,9 +547,10 @@ bool sched_tile_pixels(struct sched *s, uint32_t id, uint8_t *out)
 	bool done = s->t[id].done;
 	if (done) {
 		struct tile_rect r = tiling_rect(&s->tg, id);
+		size_t bpp = s->bpp;
 		for (uint32_t y = 0; y < r.h; y++)
-			memcpy(out + (size_t)y * r.w * 3, s->image + (((size_t)(r.y + y) * s->tg.w) + r.x) * 3,
-			       (size_t)r.w * 3);
+			memcpy(out + (size_t)y * r.w * bpp, s->image + (((size_t)(r.y + y) * s->tg.w) + r.x) * bpp,
+			       (size_t)r.w * bpp);
 	}
 	pthread_mutex_unlock(&s->mu);
 	return done;

@@ -52,15 +52,17 @@ struct sched_trust {
 };
 
 /*
- * A scheduler over the tiles of tg, writing pixels into image (tg->w *
- * tg->h * 3 bytes). audit: the fraction of results audited after each
+ * A scheduler over the tiles of tg, writing pixels of bpp bytes (3 for
+ * RGB8, 12 for RGBF32: render.h) into image (tg->w * tg->h * bpp bytes);
+ * every tile's pixels, a worker's, a local thread's or a preloaded one's,
+ * are rect w * h * bpp bytes, and audits compare them byte for byte. audit: the fraction of results audited after each
  * worker's probation (0: no audits); salt: random per render, so a worker
  * cannot tell which tiles are sampled. wake (may be NULL) is called, under
  * the lock, whenever the event loop has something to look at (the render
  * ended, a worker was caught). NULL when out of memory.
  */
-struct sched *sched_new(const struct tiling *tg, uint32_t n_workers, uint8_t *image, double audit, uint64_t salt,
-			void (*wake)(void *), void *wake_arg);
+struct sched *sched_new(const struct tiling *tg, uint32_t bpp, uint32_t n_workers, uint8_t *image, double audit,
+			uint64_t salt, void (*wake)(void *), void *wake_arg);
 void sched_free(struct sched *s);
 
 /* ---- the event loop's side (workers) ---- */
@@ -128,7 +130,7 @@ int sched_observe(struct sched *s);
 /* Moves up to max tile ids from that list into ids (each once however often
  * it changed; look at its pixels to see what it is now). Returns how many. */
 uint32_t sched_changes(struct sched *s, uint32_t *ids, uint32_t max);
-/* Copies tile id's stored pixels (rect w*h*3 bytes, rows top to bottom)
+/* Copies tile id's stored pixels (rect w*h*bpp bytes, rows top to bottom)
  * into out and returns true, or returns false when the tile is not done. */
 bool sched_tile_pixels(struct sched *s, uint32_t id, uint8_t *out);
 /* Before anything is taken: tile id is done already with pixels rgb (a

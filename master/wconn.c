@@ -291,7 +291,7 @@ static void size_window(struct worker *w)
 	double d = 2.0 * w->threads + 1;
 	if (w->svc > 0 && w->rtt > 0)
 		d += ceil(1.5 * w->rtt * w->threads / w->svc);
-	double tile_bytes = (double)f->tg.side * f->tg.side * 3;
+	double tile_bytes = (double)f->tg.side * f->tg.side * render_pixel_bytes(f->px);
 	double by_mem = FARM_WINDOW_BYTES / tile_bytes;
 	if (d > by_mem)
 		d = by_mem;
@@ -317,7 +317,7 @@ void worker_dispatch(struct worker *w)
 		if (id == SCHED_NO_TILE)
 			break;
 		struct tile_rect r = sched_rect(f->s, id);
-		struct proto_tile t = { id, r.x, r.y, r.w, r.h };
+		struct proto_tile t = { id, r.x, r.y, r.w, r.h, (uint8_t)f->px };
 		if (proto_send_tile(w->pc, &t) < 0) {
 			sched_release(f->s, id, w->index);
 			break;
@@ -414,7 +414,13 @@ static void on_result(struct worker *w, const struct proto_msg *m)
 			      t->id, t->w, t->h, t->x, t->y, r.w, r.h, r.x, r.y);
 		return;
 	}
-	if (crc32_update(0, m->u.result.pixels, (size_t)t->w * t->h * 3) != m->u.result.crc) {
+	if (t->px != (uint8_t)f->px) { /* its length follows its type: wrong either way */
+		f->invalid_results++;
+		worker_refuse(w, PERR_PROTOCOL, "tile %u came back with pixel type %u, sent with %u", t->id,
+			      (unsigned)t->px, (unsigned)f->px);
+		return;
+	}
+	if (crc32_update(0, m->u.result.pixels, proto_tile_bytes(t)) != m->u.result.crc) {
 		f->invalid_results++;
 		worker_refuse(w, PERR_PROTOCOL, "tile %u failed its checksum", t->id);
 		return;

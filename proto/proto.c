@@ -24,7 +24,7 @@
 #define PORTRAY_VERSION "dev"
 #endif
 /* the versions as plain numbers for the build id (the header constants carry a u suffix) */
-#define PROTO_BUILD_PROTO 2
+#define PROTO_BUILD_PROTO 3
 #define PROTO_BUILD_SCENE 1
 _Static_assert(PROTO_BUILD_PROTO == PROTO_VERSION && PROTO_BUILD_SCENE == PROTO_SCENE_VERSION, "build id numbers");
 #define STR2(x) #x
@@ -199,10 +199,12 @@ static int get_text(struct proto_rbuf *r, char *out, size_t max)
 	return 0;
 }
 
+_Static_assert(RENDER_RGB8 == 0 && RENDER_RGBF32 == 1, "the wire's pixel types are render.h's");
+
 static int tile_ok(const struct proto_tile *t)
 {
-	return t->w >= 1 && t->h >= 1 && t->w <= LIM_TILE_PIXELS && t->h <= LIM_TILE_PIXELS &&
-	       (uint64_t)t->w * t->h <= LIM_TILE_PIXELS && t->x <= UINT32_MAX - t->w && t->y <= UINT32_MAX - t->h;
+	return t->px <= RENDER_RGBF32 && t->w >= 1 && t->h >= 1 && t->w <= LIM_TILE_PIXELS &&
+	       t->h <= LIM_TILE_PIXELS && (uint64_t)t->w * t->h <= LIM_TILE_PIXELS && t->x <= UINT32_MAX - t->w && t->y <= UINT32_MAX - t->h;
 }
 
 static void get_tile(struct proto_rbuf *r, struct proto_tile *t)
@@ -212,6 +214,12 @@ static void get_tile(struct proto_rbuf *r, struct proto_tile *t)
 	t->y = proto_get_u32(r);
 	t->w = proto_get_u32(r);
 	t->h = proto_get_u32(r);
+	t->px = proto_get_u8(r);
+}
+
+size_t proto_tile_bytes(const struct proto_tile *t)
+{
+	return (size_t)t->w * t->h * render_pixel_bytes((enum render_pixel)t->px);
 }
 
 int proto_msg_decode(uint16_t type, const uint8_t *p, uint32_t len, struct proto_msg *m, const char **why)
@@ -285,7 +293,7 @@ int proto_msg_decode(uint16_t type, const uint8_t *p, uint32_t len, struct proto
 	case MSG_TILE:
 		get_tile(&r, &m->u.tile);
 		if (!r.err && !tile_ok(&m->u.tile)) {
-			*why = "tile size out of range";
+			*why = m->u.tile.px > RENDER_RGBF32 ? "unknown pixel type" : "tile size out of range";
 			return -1;
 		}
 		break;
@@ -296,10 +304,10 @@ int proto_msg_decode(uint16_t type, const uint8_t *p, uint32_t len, struct proto
 		if (r.err)
 			break;
 		if (!tile_ok(&m->u.result.tile)) {
-			*why = "tile size out of range";
+			*why = m->u.result.tile.px > RENDER_RGBF32 ? "unknown pixel type" : "tile size out of range";
 			return -1;
 		}
-		if (proto_rbuf_left(&r) != (size_t)m->u.result.tile.w * m->u.result.tile.h * 3) {
+		if (proto_rbuf_left(&r) != proto_tile_bytes(&m->u.result.tile)) {
 			*why = "tile result has the wrong number of pixel bytes";
 			return -1;
 		}
@@ -567,6 +575,7 @@ static void put_tile(struct proto_wbuf *b, const struct proto_tile *t)
 	proto_put_u32(b, t->y);
 	proto_put_u32(b, t->w);
 	proto_put_u32(b, t->h);
+	proto_put_u8(b, t->px);
 }
 
 int proto_send_tile(struct proto_conn *c, const struct proto_tile *t)
@@ -588,7 +597,7 @@ int proto_send_result_timed(struct proto_conn *c, const struct proto_tile *t, co
 	put_tile(&c->out, t);
 	proto_put_u32(&c->out, crc);
 	proto_put_u32(&c->out, trace_us);
-	proto_put_bytes(&c->out, pixels, (size_t)t->w * t->h * 3);
+	proto_put_bytes(&c->out, pixels, proto_tile_bytes(t));
 	return frame_end(c, at);
 }
 

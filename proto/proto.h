@@ -26,8 +26,10 @@
 #define PROTO_MAGIC 0x50524159u /* "PRAY" */
 /* 2: heartbeat interval agreed at the handshake (no clamp), the master's
  * OFFER pipelined behind its HELLO or AUTH, TILE and CANCEL accepted while
- * the worker builds */
-#define PROTO_VERSION 2u
+ * the worker builds
+ * 3: TILE and TILE_RESULT name the pixel type (RGB8, or RGBF32 for the
+ * float outputs) after the rectangle */
+#define PROTO_VERSION 3u
 #define PROTO_HEADER_BYTES 12
 #define PROTO_DEFAULT_PORT 7411
 #define PROTO_NONCE_BYTES 32
@@ -35,8 +37,9 @@
 #define PROTO_MAC_BYTES 32  /* HMAC-SHA256 */
 
 /* ---- limits (each with its reason; docs/protocol.md lists them) ---- */
-/* one frame's payload: a 1024x1024 tile result (3 MiB) plus its header fits */
-#define LIM_FRAME_PAYLOAD (4u * 1024 * 1024)
+/* one frame's payload: a 1024x1024 tile result of floats (12 MiB) plus its
+ * header fits */
+#define LIM_FRAME_PAYLOAD (13u * 1024 * 1024)
 /* scene bytes per SCENE_DATA frame: small enough to interleave heartbeats */
 #define PROTO_CHUNK_BYTES (256u * 1024)
 /* pixels in one tile on the wire: keeps a TILE_RESULT under LIM_FRAME_PAYLOAD */
@@ -114,7 +117,10 @@ struct proto_hello {
 
 struct proto_tile {
 	uint32_t id, x, y, w, h;
+	uint8_t px; /* pixel type: enum render_pixel (common/render.h), 0 RGB8 or 1 RGBF32 */
 };
+/* Bytes of t's pixels: w * h * 3 (RGB8) or w * h * 12 (RGBF32). */
+size_t proto_tile_bytes(const struct proto_tile *t);
 
 /* One decoded message. Pointers point into the connection's input buffer
  * and stay valid until the next proto_conn_next call. */
@@ -145,7 +151,7 @@ struct proto_msg {
 			struct proto_tile tile;
 			uint32_t crc;
 			uint32_t trace_us;     /* the worker's time tracing it (0: not measured) */
-			const uint8_t *pixels; /* tile.w * tile.h * 3 bytes */
+			const uint8_t *pixels; /* proto_tile_bytes(&tile) bytes */
 		} result;
 		struct {
 			uint32_t done, queued;

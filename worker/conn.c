@@ -250,7 +250,7 @@ static void on_auth(struct wk_conn *c, const struct proto_msg *m)
 /* Answers every queued tile with black pixels (--test-fault black). */
 static void answer_black(struct wk_conn *c, const struct proto_tile *t)
 {
-	size_t n = (size_t)t->w * t->h * 3;
+	size_t n = proto_tile_bytes(t); /* black: zero bytes in every pixel type */
 	uint8_t *px = calloc(1, n);
 	if (!px) {
 		wk_conn_fail(c, PERR_INTERNAL, "out of memory");

@@ -16,7 +16,7 @@
 #include "proto/net.h"
 #include "proto/serial.h"
 
-static size_t tile_bytes(const struct proto_tile *t) { return (size_t)t->w * t->h * 3; }
+static size_t tile_bytes(const struct proto_tile *t) { return proto_tile_bytes(t); }
 
 /* Unlinks j from the round-robin when its last reference goes; true then
  * (the caller frees it, or hands it to the loop). Under the lock. */
@@ -183,7 +183,8 @@ static int tr_take(void *ctx, struct tile_work *w)
 					 .rect = { tile.x, tile.y, tile.w, tile.h },
 					 .cancel = &j->cancel,
 					 .id = tile.id,
-					 .ptr = j };
+					 .ptr = j,
+					 .px = (enum render_pixel)tile.px };
 		pthread_mutex_unlock(&t->mu);
 		return 1;
 	}
@@ -198,7 +199,7 @@ static void tr_done(void *ctx, const struct tile_work *w, uint8_t **rgb, int ok)
 {
 	struct wk_tracers *t = ctx;
 	struct wk_job *j = w->ptr;
-	struct proto_tile tile = { (uint32_t)w->id, w->rect.x, w->rect.y, w->rect.w, w->rect.h };
+	struct proto_tile tile = { (uint32_t)w->id, w->rect.x, w->rect.y, w->rect.w, w->rect.h, (uint8_t)w->px };
 	size_t n = tile_bytes(&tile);
 	ok = wk_fault_traced(t->faults, *rgb, ok, &j->cancel);
 	struct wk_result *r = NULL;

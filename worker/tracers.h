@@ -38,7 +38,7 @@ struct wk_job;
 struct wk_result {
 	struct wk_job *job;      /* holds a reference until wk_result_release */
 	struct proto_tile tile;
-	uint8_t *pixels;         /* tile.w * tile.h * 3 bytes, owned; NULL for a failure */
+	uint8_t *pixels;         /* proto_tile_bytes(&tile) bytes, owned; NULL for a failure */
 	uint32_t crc;
 	uint32_t trace_us;       /* time spent tracing it (the master sizes its window from it) */
 	struct wk_result *next;

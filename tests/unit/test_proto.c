@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "common/render.h"
 #include "proto/net.h"
 #include "proto/proto.h"
 #include "proto/sha256.h"
@@ -44,6 +45,11 @@ static int xfer(struct proto_msg *m, int *code, const char **why)
 	while (proto_conn_read(B, &w) > 0)
 		;
 	return proto_conn_next(B, m, code, why);
+}
+
+static int same_tile(const struct proto_tile *a, const struct proto_tile *b)
+{
+	return a->id == b->id && a->x == b->x && a->y == b->y && a->w == b->w && a->h == b->h && a->px == b->px;
 }
 
 static void test_round_trips(void)
@@ -82,15 +88,24 @@ static void test_round_trips(void)
 	      m.u.data.n == 1000 && memcmp(m.u.data.bytes, chunk, 1000) == 0);
 	proto_send_ready(A, hash, true, 99);
 	CHECK(xfer(&m, &code, &why) == 1 && m.u.ready.cached == 1 && m.u.ready.build_ms == 99);
-	struct proto_tile t = { 17, 32, 64, 10, 3 };
+	struct proto_tile t = { 17, 32, 64, 10, 3, RENDER_RGB8 };
 	proto_send_tile(A, &t);
-	CHECK(xfer(&m, &code, &why) == 1 && m.type == MSG_TILE && memcmp(&m.u.tile, &t, sizeof t) == 0);
-	uint8_t px[90];
-	for (int i = 0; i < 90; i++)
+	CHECK(xfer(&m, &code, &why) == 1 && m.type == MSG_TILE && same_tile(&m.u.tile, &t));
+	uint8_t px[360];
+	for (int i = 0; i < 360; i++)
 		px[i] = (uint8_t)i;
+	CHECK(proto_tile_bytes(&t) == 90);
 	proto_send_result(A, &t, px, crc32_update(0, px, 90));
-	CHECK(xfer(&m, &code, &why) == 1 && m.type == MSG_TILE_RESULT && m.u.result.tile.id == 17 &&
+	CHECK(xfer(&m, &code, &why) == 1 && m.type == MSG_TILE_RESULT && same_tile(&m.u.result.tile, &t) &&
 	      m.u.result.crc == crc32_update(0, px, 90) && memcmp(m.u.result.pixels, px, 90) == 0);
+	/* the float pixel type: 12 bytes a pixel, named in TILE and TILE_RESULT */
+	t.px = RENDER_RGBF32;
+	CHECK(proto_tile_bytes(&t) == 360);
+	proto_send_tile(A, &t);
+	CHECK(xfer(&m, &code, &why) == 1 && m.type == MSG_TILE && same_tile(&m.u.tile, &t));
+	proto_send_result_timed(A, &t, px, crc32_update(0, px, 360), 5);
+	CHECK(xfer(&m, &code, &why) == 1 && m.type == MSG_TILE_RESULT && same_tile(&m.u.result.tile, &t) &&
+	      m.u.result.trace_us == 5 && memcmp(m.u.result.pixels, px, 360) == 0);
 	proto_send_heartbeat(A, 5, 6);
 	CHECK(xfer(&m, &code, &why) == 1 && m.u.heartbeat.done == 5 && m.u.heartbeat.queued == 6);
 	proto_send_cancel(A, PROTO_CANCEL_ALL);
@@ -108,14 +123,14 @@ static void test_round_trips(void)
 static void test_short_reads(void)
 {
 	pair();
-	struct proto_tile t = { 1, 0, 0, 4, 4 };
+	struct proto_tile t = { 1, 0, 0, 4, 4, RENDER_RGB8 };
 	uint8_t px[48] = { 0 };
 	proto_send_result(A, &t, px, crc32_update(0, px, 48));
 	proto_send_bye(A);
 	CHECK(proto_conn_flush(A) == 0);
 	uint8_t all[256];
 	ssize_t n = recv(sv[1], all, sizeof all, 0);
-	CHECK(n == 12 + 28 + 48 + 12);
+	CHECK(n == 12 + 29 + 48 + 12);
 	/* feed it back through a fresh pair one byte at a time */
 	int p2[2];
 	CHECK(socketpair(AF_UNIX, SOCK_STREAM, 0, p2) == 0);
@@ -129,7 +144,7 @@ static void test_short_reads(void)
 		CHECK(proto_conn_read(r, &why) == 1);
 		int k = proto_conn_next(r, &m, &code, &why);
 		if (k == 1)
-			got++, early += i != 12 + 28 + 48 - 1;
+			got++, early += i != 12 + 29 + 48 - 1;
 		CHECK(k >= 0);
 	}
 	CHECK(got == 1 && early == 0);
@@ -161,7 +176,7 @@ static int raw_frame(const uint8_t *p, size_t n, struct proto_msg *m, int *code,
 
 static void test_bad_frames(void)
 {
-	uint8_t f[64] = { 0 };
+	uint8_t f[128] = { 0 };
 	struct proto_msg m;
 	int code = 0;
 	const char *why = "";
@@ -186,15 +201,33 @@ static void test_bad_frames(void)
 	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_CANCEL, 3);
 	CHECK(raw_frame(f, 15, &m, &code, &why) == -1 && strstr(why, "shorter"));
 	/* a tile result whose pixel bytes do not match its rectangle */
-	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_TILE_RESULT, 28 + 11);
-	memset(f + 12, 0, 28 + 11);
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_TILE_RESULT, 29 + 11);
+	memset(f + 12, 0, 29 + 11);
 	proto_wr32(f + 12 + 12, 2), proto_wr32(f + 12 + 16, 2); /* 2x2: 12 bytes */
-	CHECK(raw_frame(f, 12 + 39, &m, &code, &why) == -1 && strstr(why, "pixel bytes"));
-	/* a tile larger than the limit */
-	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_TILE, 20);
-	memset(f + 12, 0, 20);
+	CHECK(raw_frame(f, 12 + 40, &m, &code, &why) == -1 && strstr(why, "pixel bytes"));
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_TILE_RESULT, 29 + 12);
+	memset(f + 12, 0, 29 + 12);
+	proto_wr32(f + 12 + 12, 2), proto_wr32(f + 12 + 16, 2);
+	CHECK(raw_frame(f, 12 + 41, &m, &code, &why) == 1 && m.u.result.tile.px == RENDER_RGB8);
+	f[12 + 20] = RENDER_RGBF32; /* 2x2 floats: 48 bytes, not 12 */
+	CHECK(raw_frame(f, 12 + 41, &m, &code, &why) == -1 && strstr(why, "pixel bytes"));
+	f[12 + 20] = 2; /* no such type */
+	CHECK(raw_frame(f, 12 + 41, &m, &code, &why) == -1 && strstr(why, "unknown pixel type"));
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_TILE_RESULT, 29 + 48);
+	memset(f + 12, 0, 29 + 48);
+	proto_wr32(f + 12 + 12, 2), proto_wr32(f + 12 + 16, 2);
+	f[12 + 20] = RENDER_RGBF32;
+	CHECK(raw_frame(f, 12 + 29 + 48, &m, &code, &why) == 1 && m.u.result.tile.px == RENDER_RGBF32);
+	/* a tile larger than the limit; a tile of an unknown pixel type */
+	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_TILE, 21);
+	memset(f + 12, 0, 21);
 	proto_wr32(f + 12 + 12, 2048), proto_wr32(f + 12 + 16, 2048);
-	CHECK(raw_frame(f, 32, &m, &code, &why) == -1 && strstr(why, "tile size"));
+	CHECK(raw_frame(f, 33, &m, &code, &why) == -1 && strstr(why, "tile size"));
+	proto_wr32(f + 12 + 12, 8), proto_wr32(f + 12 + 16, 8);
+	f[12 + 20] = RENDER_RGBF32;
+	CHECK(raw_frame(f, 33, &m, &code, &why) == 1 && m.u.tile.px == RENDER_RGBF32);
+	f[12 + 20] = 7;
+	CHECK(raw_frame(f, 33, &m, &code, &why) == -1 && strstr(why, "unknown pixel type"));
 	/* an error text longer than the limit */
 	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_ERROR, 6);
 	proto_wr16(f + 12, 1);

@@ -291,12 +291,12 @@ static int run_job(struct proto_conn *c, const uint8_t *enc, size_t len, const s
 		if (!next_real(c, &m) || m.type != MSG_TILE_RESULT)
 			return 0;
 		const struct proto_tile *t = &m.u.result.tile;
-		uint8_t px[16 * 16 * 3];
+		uint8_t px[16 * 16 * RENDER_PIXEL_MAX_BYTES];
 		struct tile_rect rect = { t->x, t->y, t->w, t->h };
-		size_t bytes = (size_t)t->w * t->h * 3;
+		size_t bytes = proto_tile_bytes(t);
 		if (bytes > sizeof px)
 			return 0;
-		renderer_tile(r, rect, px);
+		renderer_tile_px(r, rect, (enum render_pixel)t->px, px, NULL);
 		for (int i = 0; i < n; i++)
 			same += t->id == tiles[i].id && memcmp(px, m.u.result.pixels, bytes) == 0 &&
 				crc32_update(0, px, bytes) == m.u.result.crc;
@@ -515,7 +515,7 @@ static void test_back_pressure(pid_t pid)
 	long rss0 = rss_kib(pid);
 	enum { N = 1000, SIDE = 128 };
 	for (uint32_t i = 0; i < N; i++) {
-		struct proto_tile t = { i, (i % 8) * SIDE, (i / 8 % 8) * SIDE, SIDE, SIDE };
+		struct proto_tile t = { i, (i % 8) * SIDE, (i / 8 % 8) * SIDE, SIDE, SIDE, RENDER_RGB8 };
 		proto_send_tile(c, &t);
 	}
 	while (proto_conn_outq(c) > 0) { /* the tiles go out; nothing is read */
@@ -540,7 +540,7 @@ static void test_back_pressure(pid_t pid)
 	/* now read: every tile arrives, with the right checksum */
 	uint32_t got = 0, good = 0;
 	while (got < N && next_real(c, &m) && m.type == MSG_TILE_RESULT) {
-		size_t n = (size_t)m.u.result.tile.w * m.u.result.tile.h * 3;
+		size_t n = proto_tile_bytes(&m.u.result.tile);
 		good += m.u.result.tile.w == SIDE && crc32_update(0, m.u.result.pixels, n) == m.u.result.crc;
 		got++;
 	}
@@ -612,7 +612,8 @@ static void test_cancel_on_close(const uint8_t hash[32], const uint8_t *enc, siz
 	struct test_worker w;
 	CHECK(worker_start(&w, 0, "1", extra) == 0);
 	struct proto_msg m;
-	struct proto_tile tiles[3] = { { 1, 0, 0, 8, 8 }, { 2, 8, 0, 8, 8 }, { 3, 16, 0, 8, 8 } };
+	struct proto_tile tiles[3] = { { 1, 0, 0, 8, 8, RENDER_RGB8 }, { 2, 8, 0, 8, 8, RENDER_RGB8 },
+				       { 3, 16, 0, 8, 8, RENDER_RGB8 } };
 	struct proto_conn *c = hello(ROLE_MASTER, PROTO_VERSION);
 	CHECK(c != NULL);
 	if (c) {
@@ -647,7 +648,7 @@ static void test_sigterm_slow(const uint8_t hash[32], const uint8_t *enc, size_t
 	struct proto_conn *c = hello(ROLE_MASTER, PROTO_VERSION);
 	CHECK(c != NULL);
 	if (c) {
-		struct proto_tile t = { 1, 0, 0, 8, 8 };
+		struct proto_tile t = { 1, 0, 0, 8, 8, RENDER_RGB8 };
 		proto_send_offer(c, hash, len, 64, 48);
 		CHECK(next_real(c, &m) && m.type == MSG_SCENE_NEED);
 		proto_send_data(c, 0, enc, (uint32_t)len);
@@ -725,7 +726,7 @@ static void test_idle_flood(const uint8_t hash[32], const uint8_t *enc, size_t l
 	CHECK(fds > 0 && fds <= 64 + 32);
 	if (fds > 64 + 32)
 		fprintf(stderr, "worker under an idle flood holds %d descriptors\n", fds);
-	struct proto_tile tiles[2] = { { 1, 0, 0, 16, 16 }, { 2, 16, 16, 16, 16 } };
+	struct proto_tile tiles[2] = { { 1, 0, 0, 16, 16, RENDER_RGB8 }, { 2, 16, 16, 16, 16, RENDER_RGB8 } };
 	int ok = 0, attempts = 0;
 	for (; attempts < 3 && !ok; attempts++) { /* a real master retries too */
 		struct proto_conn *c = dial();
@@ -800,7 +801,7 @@ int main(void)
 	CHECK(c && expect_error(c, PERR_VERSION, vtext));
 	proto_conn_free(c);
 	c = hello(ROLE_MASTER, PROTO_VERSION);
-	struct proto_tile t0 = { 1, 0, 0, 8, 8 };
+	struct proto_tile t0 = { 1, 0, 0, 8, 8, RENDER_RGB8 };
 	proto_send_tile(c, &t0);
 	proto_conn_flush(c);
 	CHECK(c && expect_error(c, PERR_PROTOCOL, "unexpected TILE"));
@@ -873,7 +874,9 @@ int main(void)
 	struct renderer *r = NULL;
 	struct scene_error err;
 	CHECK(renderer_new(s, &r, &err) == 0);
-	struct proto_tile tiles[3] = { { 7, 0, 0, 16, 16 }, { 8, 48, 40, 16, 8 }, { 9, 10, 20, 5, 3 } };
+	/* (protocol 3: either pixel type, even within one job) */
+	struct proto_tile tiles[3] = { { 7, 0, 0, 16, 16, RENDER_RGB8 }, { 8, 48, 40, 16, 8, RENDER_RGBF32 },
+				       { 9, 10, 20, 5, 3, RENDER_RGBF32 } };
 	int cached = -1;
 	c = dial();
 	CHECK(c && next_real(c, &m) && m.type == MSG_HELLO);
@@ -885,7 +888,7 @@ int main(void)
 	proto_send_offer(c, real, len, 64, 48);
 	CHECK(run_job(c, enc, len, r, tiles, 3, &cached) && cached == 0);
 	/* a tile outside the image ends the job with an error */
-	struct proto_tile out = { 10, 60, 40, 8, 8 };
+	struct proto_tile out = { 10, 60, 40, 8, 8, RENDER_RGB8 };
 	proto_send_tile(c, &out);
 	CHECK(expect_error(c, PERR_PROTOCOL, "outside"));
 	proto_conn_free(c);

@@ -212,10 +212,10 @@ static void test_take(void)
 	tiling_init(&none, 0, 0, SIDE);
 	uint8_t *img = blank_image(&tg);
 	CHECK(tg.n == N_TILES);
-	CHECK(sched_new(&tg, SCHED_MAX_WORKERS + 1, img, 0, 1, NULL, NULL) == NULL);
-	CHECK(sched_new(&none, 1, img, 0, 1, NULL, NULL) == NULL);
+	CHECK(sched_new(&tg, 3, SCHED_MAX_WORKERS + 1, img, 0, 1, NULL, NULL) == NULL);
+	CHECK(sched_new(&none, 3, 1, img, 0, 1, NULL, NULL) == NULL);
 
-	struct sched *s = sched_new(&tg, 2, img, 0, 1, NULL, NULL);
+	struct sched *s = sched_new(&tg, 3, 2, img, 0, 1, NULL, NULL);
 	CHECK(s != NULL);
 	struct sched_stats st = stats_of(s);
 	CHECK(st.n == N_TILES && st.done == 0 && st.redispatched == 0 && st.duplicates == 0);
@@ -238,7 +238,7 @@ static void test_take(void)
 	CHECK(sched_take(s, 0, true, 21) == SCHED_NO_TILE);
 	sched_free(s);
 
-	s = sched_new(&tg, 2, img, 0, 1, NULL, NULL);
+	s = sched_new(&tg, 3, 2, img, 0, 1, NULL, NULL);
 	CHECK(sched_take(s, 0, false, 1) == 0);
 	CHECK(atomic_load(sched_stop_flag(s)) == 0);
 	sched_stop(s);
@@ -265,7 +265,7 @@ static void test_requeue(void)
 	struct tiling tg;
 	tiling_init(&tg, IMG_W, IMG_H, SIDE);
 	uint8_t *img = blank_image(&tg);
-	struct sched *s = sched_new(&tg, 3, img, 0, 1, NULL, NULL);
+	struct sched *s = sched_new(&tg, 3, 3, img, 0, 1, NULL, NULL);
 	CHECK(sched_take(s, 0, false, 1) == 0);
 	CHECK(sched_take(s, 0, false, 2) == 1);
 	CHECK(sched_take(s, 0, false, 3) == 2);
@@ -287,7 +287,7 @@ static void test_requeue(void)
 
 	/* two tiles: a held duplicate keeps its tile out of the queue */
 	tiling_init(&tg, 16, 8, SIDE);
-	s = sched_new(&tg, 3, img, 0, 1, NULL, NULL);
+	s = sched_new(&tg, 3, 3, img, 0, 1, NULL, NULL);
 	CHECK(sched_take(s, 0, false, 1) == 0);
 	CHECK(sched_take(s, 0, false, 2) == 1);
 	CHECK(sched_take(s, 1, true, 3) == 0); /* the oldest */
@@ -322,7 +322,7 @@ static void test_duplicate(void)
 	struct tiling tg;
 	tiling_init(&tg, 24, 8, SIDE); /* 3 tiles */
 	uint8_t *img = blank_image(&tg);
-	struct sched *s = sched_new(&tg, 5, img, 0, 1, NULL, NULL);
+	struct sched *s = sched_new(&tg, 3, 5, img, 0, 1, NULL, NULL);
 	/* handed out at times 3, 2, 1: tile 2 is the oldest, tile 0 the newest */
 	CHECK(sched_take(s, 0, false, 3) == 0);
 	CHECK(sched_take(s, 1, false, 2) == 1);
@@ -360,7 +360,7 @@ static void test_duplicate(void)
 	/* a claim awaiting its audit is never duplicated, even with one holder
 	 * left (the local thread that traces it anyway) */
 	memset(img, SENTINEL, (size_t)tg.w * tg.h * 3);
-	s = sched_new(&tg, 3, img, 1.0, 1, NULL, NULL);
+	s = sched_new(&tg, 3, 3, img, 1.0, 1, NULL, NULL);
 	uint32_t id = SCHED_NO_TILE;
 	bool audit = true;
 	CHECK(local_take(s, false, &id, &audit) == 1);
@@ -383,7 +383,7 @@ static void test_duplicate(void)
 	/* a local thread's tile is as old as when it took it: one a worker
 	 * had before is older */
 	tiling_init(&tg, 16, 8, SIDE); /* 2 tiles */
-	s = sched_new(&tg, 2, img, 0, 1, NULL, NULL);
+	s = sched_new(&tg, 3, 2, img, 0, 1, NULL, NULL);
 	CHECK(sched_take(s, 0, false, 10) == 0);
 	CHECK(local_take(s, false, &id, &audit) == 1);
 	CHECK(id == 1 && !audit);
@@ -403,7 +403,7 @@ static void test_image(void)
 	uint8_t *img = blank_image(&tg), *want = blank_image(&tg);
 	atomic_int wakes;
 	atomic_init(&wakes, 0);
-	struct sched *s = sched_new(&tg, 2, img, 0, 1, wake_count, &wakes);
+	struct sched *s = sched_new(&tg, 3, 2, img, 0, 1, wake_count, &wakes);
 	for (uint32_t i = 0; i < N_TILES; i++)
 		CHECK(sched_take(s, (uint16_t)(i % 2), false, 1.0 + i) == i);
 	struct taker t;
@@ -453,7 +453,7 @@ static void test_local(void)
 	struct tiling tg;
 	tiling_init(&tg, 32, 8, SIDE); /* 4 tiles */
 	uint8_t *img = blank_image(&tg);
-	struct sched *s = sched_new(&tg, 2, img, 1.0, 1, NULL, NULL);
+	struct sched *s = sched_new(&tg, 3, 2, img, 1.0, 1, NULL, NULL);
 	uint32_t id = SCHED_NO_TILE;
 	bool audit = false;
 	uint16_t cancel;
@@ -498,7 +498,7 @@ static void test_local(void)
 
 	/* an ordinary (non-audit-only) thread blocks too when all is held */
 	tiling_init(&tg, 8, 8, SIDE);
-	s = sched_new(&tg, 1, img, 0, 1, NULL, NULL);
+	s = sched_new(&tg, 3, 1, img, 0, 1, NULL, NULL);
 	CHECK(local_take(s, false, &id, &audit) == 1);
 	CHECK(id == 0 && !audit);
 	CHECK(taker_start(&t, s, false));
@@ -516,7 +516,7 @@ static void test_local(void)
 	 */
 	tiling_init(&tg, 24, 8, SIDE); /* 3 tiles */
 	memset(img, SENTINEL, (size_t)tg.w * tg.h * 3);
-	s = sched_new(&tg, 2, img, 1.0, 1, NULL, NULL);
+	s = sched_new(&tg, 3, 2, img, 1.0, 1, NULL, NULL);
 	CHECK(local_take(s, false, &id, &audit) == 1);
 	CHECK(id == 0 && !audit);
 	CHECK(sched_take(s, 0, false, 1) == 1);
@@ -552,10 +552,10 @@ static void test_audit_due(void)
 	struct tiling tg;
 	tiling_init(&tg, IMG_W, IMG_H, SIDE);
 	uint8_t *img = blank_image(&tg);
-	struct sched *a = sched_new(&tg, 4, img, 0.25, 0x1234, NULL, NULL);
-	struct sched *b = sched_new(&tg, 4, img, 0.25, 0x1234, NULL, NULL);
-	struct sched *c = sched_new(&tg, 4, img, 0.25, 0x5678, NULL, NULL);
-	struct sched *z = sched_new(&tg, 4, img, 0, 0x1234, NULL, NULL);
+	struct sched *a = sched_new(&tg, 3, 4, img, 0.25, 0x1234, NULL, NULL);
+	struct sched *b = sched_new(&tg, 3, 4, img, 0.25, 0x1234, NULL, NULL);
+	struct sched *c = sched_new(&tg, 3, 4, img, 0.25, 0x5678, NULL, NULL);
+	struct sched *z = sched_new(&tg, 3, 4, img, 0, 0x1234, NULL, NULL);
 	bool probation = true;
 	for (uint32_t d = 0; d < SCHED_AUDIT_PROBATION; d++)
 		if (count_due(a, 1, d, 1000) != 1000)
@@ -597,7 +597,7 @@ static void test_audit(void)
 	uint8_t *img = blank_image(&tg);
 	atomic_int wakes;
 	atomic_init(&wakes, 0);
-	struct sched *s = sched_new(&tg, 3, img, 1.0, 1, wake_count, &wakes);
+	struct sched *s = sched_new(&tg, 3, 3, img, 1.0, 1, wake_count, &wakes);
 	uint16_t cancel;
 	uint32_t id = SCHED_NO_TILE;
 	bool audit = false, first = true;
@@ -691,7 +691,7 @@ static void test_drop(void)
 	struct tiling tg;
 	tiling_init(&tg, IMG_W, IMG_H, SIDE);
 	uint8_t *img = blank_image(&tg);
-	struct sched *s = sched_new(&tg, 3, img, 0, 1, NULL, NULL);
+	struct sched *s = sched_new(&tg, 3, 3, img, 0, 1, NULL, NULL);
 	uint32_t held[5];
 	for (uint32_t i = 0; i < 5; i++)
 		held[i] = sched_take(s, 0, false, 1.0 + i);
@@ -826,7 +826,7 @@ static void test_stress(void)
 		paint(&tg, want, i, 0);
 	atomic_int wakes;
 	atomic_init(&wakes, 0);
-	struct sched *s = sched_new(&tg, ST_WORKERS, img, 0.3, 0xfeed, wake_count, &wakes);
+	struct sched *s = sched_new(&tg, 3, ST_WORKERS, img, 0.3, 0xfeed, wake_count, &wakes);
 	struct st_worker w[ST_WORKERS];
 	memset(w, 0, sizeof w);
 	uint32_t seed = 0x9e3779b9u;
@@ -971,7 +971,7 @@ static void test_observe(void)
 	uint8_t *img = blank_image(&tg);
 	atomic_int wakes;
 	atomic_init(&wakes, 0);
-	struct sched *s = sched_new(&tg, 2, img, 1.0, 1, wake_count, &wakes);
+	struct sched *s = sched_new(&tg, 3, 2, img, 1.0, 1, wake_count, &wakes);
 	uint32_t ids[N_TILES + 1];
 	uint8_t px[SIDE * SIDE * 3], want[SIDE * SIDE * 3];
 	uint16_t cancel;
@@ -1032,7 +1032,7 @@ static void test_observe(void)
 
 	/* a render whose every tile is preloaded is finished */
 	img = blank_image(&tg);
-	s = sched_new(&tg, 0, img, 0, 1, NULL, NULL);
+	s = sched_new(&tg, 3, 0, img, 0, 1, NULL, NULL);
 	for (uint32_t i = 0; i < N_TILES; i++) {
 		fill(s, i, 0, px);
 		CHECK(sched_preload(s, i, px) == 0);
