@@ -1,8 +1,14 @@
 #!/bin/sh
 # Every output format from the farm is byte-identical to the local render's
 # file (the render-time text left out: it is the one thing that changes
-# from run to run), with and without local threads.
+# from run to run), with and without local threads. The float formats
+# (png16, pfm, exr, exr-half) travel as float tiles (protocol 3): a bright
+# scene's PFM from the farm holds the same values above 1 as the local one,
+# whatever the tile size, and a worker lying about one float bit is caught
+# by the audits as an 8-bit liar is.
 . "$(dirname "$0")/farm_lib.inc"
+PIXSTAT=$TOOLS/pixstat
+[ -x "$PIXSTAT" ] || fail "$PIXSTAT missing (make test builds it)"
 start_worker a -j 1
 start_worker b -j 2
 W=127.0.0.1:$a_PORT,127.0.0.1:$b_PORT
@@ -15,4 +21,30 @@ for f in png png16 ppm pfm exr exr-half; do
 		>"$T/farm2.$f" 2>"$T/m.log" || fail "farm render ($f, local threads, -o -) failed"
 	cmp "$T/local.$f" "$T/farm2.$f" || fail "farm $f (local threads, -o -) differs from the local render"
 done
+
+# values above 1 come through the farm as they are
+cat >"$T/bright.sce" <<'SCE'
+camera look-from (0 0 10) look-at (0 0 0) drop-line (0 -1 0) depth 1 x-size 0.8 y-size 0.6 ;
+image xsize 64 ysize 48 ;
+light colour (1.5 1.5 1.5) position (-5 5 10) ;
+object sphere centre (0 0 0) radius 3 ; material colour (0.9 0.9 0.9) ; ;
+SCE
+local_render "$T/bright.sce" "$T/local_b.pfm" -j 1 --tile 8
+"$PIXSTAT" "$T/local_b.pfm" >"$T/stat" || fail "pixstat: $(cat "$T/stat")"
+read -r _ _ _ _ _ _ above _ <"$T/stat"
+[ "$above" -gt 1000 ] || fail "bright PFM: $above values above 1 ($(cat "$T/stat"))"
+for tile in 5 32 64; do
+	"$BIN/portray-master" "$T/bright.sce" -o "$T/farm_b.pfm" -w "$W" --no-local --tile $tile 2>"$T/m.log" ||
+		fail "farm render of the bright scene (--tile $tile) failed"
+	cmp "$T/local_b.pfm" "$T/farm_b.pfm" || fail "farm bright PFM (--tile $tile) differs from the local render"
+done
+
+# a float liar (one bit of one float flipped, checksum valid) is caught
+# beside an honest worker (20 ms a tile: the liar takes part whatever the load)
+start_worker liar -j 1 --test-fault lie
+start_worker slow -j 1 --test-delay-ms 20
+"$BIN/portray-master" "$T/bright.sce" -o "$T/farm_l.pfm" -w "127.0.0.1:$slow_PORT,127.0.0.1:$liar_PORT" \
+	--no-local --tile 8 2>"$T/ml.log" || fail "farm render with a float liar failed"
+cmp "$T/local_b.pfm" "$T/farm_l.pfm" || fail "PFM differs with a lying worker"
+grep -q "worker 127.0.0.1:$liar_PORT returned wrong pixels" "$T/ml.log" || fail "the float liar was not caught"
 echo "farm_formats: ok"
