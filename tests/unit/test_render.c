@@ -98,6 +98,49 @@ static uint8_t *render(const struct renderer *r, int threads, uint32_t tile)
 	return img;
 }
 
+/* The float pixels of r (RENDER_RGBF32): one tile of the whole image equals
+ * the same image traced in tiles of 5 (a corner tile's outside pixels all
+ * zero bytes), and each value clamped and rounded to 8 bits is the RGB8
+ * pixel of rgb (within 1: the float is the double rounded once). */
+static void check_float_tiles(const struct renderer *r, const uint8_t *rgb)
+{
+	uint8_t *whole = malloc(W * H * 12), *parts = malloc(W * H * 12), tile[5 * 5 * 12];
+	CHECK(whole && parts);
+	if (!whole || !parts)
+		goto out;
+	CHECK(renderer_tile_px(r, (struct tile_rect){ 0, 0, W, H }, RENDER_RGBF32, whole, NULL) == 1);
+	for (uint32_t y = 0; y < H; y += 5)
+		for (uint32_t x = 0; x < W; x += 5) {
+			memset(tile, 0x55, sizeof tile);
+			CHECK(renderer_tile_px(r, (struct tile_rect){ x, y, 5, 5 }, RENDER_RGBF32, tile, NULL) == 1);
+			for (uint32_t j = 0; j < 5; j++)
+				for (uint32_t i = 0; i < 5; i++) {
+					const uint8_t *p = tile + (j * 5 + i) * 12;
+					if (x + i < W && y + j < H)
+						memcpy(parts + ((y + j) * W + x + i) * 12, p, 12);
+					else
+						for (int k = 0; k < 12; k++)
+							CHECK(p[k] == 0);
+				}
+		}
+	CHECK(memcmp(whole, parts, W * H * 12) == 0);
+	int off = 0, far = 0;
+	for (int i = 0; i < W * H * 3; i++) {
+		const uint8_t *p = whole + 4 * i;
+		uint32_t u = (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+		float f;
+		memcpy(&f, &u, sizeof f);
+		double v = f < 0 ? 0 : f > 1 ? 1 : f;
+		int q = (int)(v * 255.0 + 0.5), d = q - rgb[i];
+		off += d != 0;
+		far += d < -1 || d > 1;
+	}
+	CHECK(far == 0 && off <= W * H * 3 / 100);
+out:
+	free(whole);
+	free(parts);
+}
+
 int main(void)
 {
 	struct scene_error err;
@@ -128,6 +171,7 @@ int main(void)
 	CHECK(memcmp(a, b, W * H * 3) == 0);
 	CHECK(memcmp(a, d, W * H * 3) == 0);
 	CHECK(memcmp(a, e, W * H * 3) == 0);
+	check_float_tiles(r, a); /* pixel by pixel (filter_pixel) */
 	/* the picture is not blank and not flat */
 	int lit = 0, distinct = 0;
 	for (int i = 0; i < W * H * 3; i++) {
@@ -192,6 +236,7 @@ int main(void)
 	CHECK(renderer_new(s, &r, &err) == 0);
 	a = render(r, 2, 16);
 	CHECK(renderer_rays(r) == W * H);
+	check_float_tiles(r, a); /* 2x2 blocks */
 	/* 2x2 blocks (render.c): odd tiles and -j give the same image; a tile
 	 * over the image's corner has its outside pixels black */
 	uint8_t *o = render(r, 1, 3), *o2 = render(r, 3, 5);

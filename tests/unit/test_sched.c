@@ -1043,6 +1043,87 @@ static void test_observe(void)
 	free(img);
 }
 
+/* ---- pixels of 12 bytes (RGBF32) ---- */
+
+/* Tile id of a 12-byte-pixel image as variant v: floats of the pixel's
+ * place, stored as little-endian bytes (the scheduler only moves bytes). */
+static void fill_f32(const struct tiling *tg, uint32_t id, uint32_t v, uint8_t *px)
+{
+	struct tile_rect r = tiling_rect(tg, id);
+	for (uint32_t y = 0; y < r.h; y++)
+		for (uint32_t x = 0; x < r.w; x++)
+			for (uint32_t c = 0; c < 3; c++) {
+				float f = (float)(r.x + x) * 0.25f + (float)(r.y + y) * 1.5f + (float)c * 3.0f +
+					  (float)v * 0.001f - 2.0f; /* some negative, some far above 1 */
+				uint32_t u;
+				memcpy(&u, &f, sizeof u);
+				uint8_t *o = px + ((size_t)y * r.w + x) * 12 + c * 4;
+				o[0] = (uint8_t)u, o[1] = (uint8_t)(u >> 8), o[2] = (uint8_t)(u >> 16), o[3] = (uint8_t)(u >> 24);
+			}
+}
+
+/* sched_new with bpp 12: sched_bpp says so; tiles land at 12 bytes a pixel;
+ * sched_tile_pixels and sched_preload move 12 bytes a pixel; an audit that
+ * finds one bit of one float changed catches the worker, and an identical
+ * one passes. */
+static void test_float_pixels(void)
+{
+	struct tiling tg;
+	tiling_init(&tg, IMG_W, IMG_H, SIDE);
+	size_t n = (size_t)tg.w * tg.h * 12;
+	uint8_t *img = malloc(n), *want = malloc(n);
+	uint8_t px[SIDE * SIDE * 12], out[SIDE * SIDE * 12];
+	CHECK(img && want);
+	if (!img || !want)
+		return;
+	memset(img, SENTINEL, n);
+	CHECK(sched_new(&tg, 0, 1, img, 0, 1, NULL, NULL) == NULL);
+	struct sched *s = sched_new(&tg, 12, 2, img, 1.0, 1, NULL, NULL);
+	CHECK(s != NULL && sched_bpp(s) == 12);
+	CHECK(sched_observe(s) == 0);
+	/* tile 0 preloaded; the rest: worker 0 honest, worker 1 lies about one bit */
+	fill_f32(&tg, 0, 0, px);
+	CHECK(sched_preload(s, 0, px) == 0);
+	uint16_t cancel;
+	uint32_t id;
+	bool audit;
+	CHECK(sched_take(s, 0, false, 1) == 1);
+	fill_f32(&tg, 1, 0, px);
+	CHECK(sched_result(s, 1, 0, px, true, &cancel) == SCHED_USED);
+	CHECK(local_take(s, true, &id, &audit) == 1 && id == 1 && audit);
+	sched_local_done(s, 1, true, px, true); /* the same bytes: passes */
+	CHECK(stats_of(s).audit_failed == 0 && stats_of(s).done == 2);
+	CHECK(sched_take(s, 1, false, 2) == 2);
+	fill_f32(&tg, 2, 0, px);
+	px[5 * 12 + 4] ^= 1; /* the lowest bit of one green value */
+	CHECK(sched_result(s, 2, 1, px, true, &cancel) == SCHED_USED);
+	CHECK(local_take(s, true, &id, &audit) == 1 && id == 2 && audit);
+	fill_f32(&tg, 2, 0, px);
+	sched_local_done(s, 2, true, px, true);
+	struct sched_trust tr;
+	bool first;
+	CHECK(stats_of(s).audit_failed == 1 && sched_caught(s, 1, &tr, &first) && tr.tile == 2);
+	/* the rest by the local threads */
+	while (local_take(s, false, &id, &audit) == 1) {
+		fill_f32(&tg, id, 0, px);
+		sched_local_done(s, id, audit, px, true);
+		if (sched_finished(s))
+			break;
+	}
+	CHECK(sched_finished(s));
+	for (uint32_t t = 0; t < tg.n; t++) {
+		struct tile_rect r = tiling_rect(&tg, t);
+		fill_f32(&tg, t, 0, px);
+		for (uint32_t y = 0; y < r.h; y++)
+			memcpy(want + (((size_t)(r.y + y) * tg.w) + r.x) * 12, px + (size_t)y * r.w * 12, (size_t)r.w * 12);
+		CHECK(sched_tile_pixels(s, t, out) && memcmp(out, px, (size_t)r.w * r.h * 12) == 0);
+	}
+	CHECK(memcmp(img, want, n) == 0);
+	sched_free(s);
+	free(img);
+	free(want);
+}
+
 int main(void)
 {
 	test_take();
@@ -1055,5 +1136,6 @@ int main(void)
 	test_drop();
 	test_stress();
 	test_observe();
+	test_float_pixels();
 	TEST_MAIN_END();
 }
