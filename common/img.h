@@ -33,14 +33,15 @@ uint32_t img_adler32(uint32_t adler, const uint8_t *p, size_t n);
  * renderer sends to the display without a curve, which the files declare
  * as sRGB-encoded (docs/camera.md, "Output formats").
  *   IMG_RGB8:   3 bytes a pixel, the renderer's clamped and rounded bytes.
- *   IMG_RGBF32: 3 floats a pixel, unclamped (what a float pipeline would
- *               give; nothing feeds it yet).
+ *   IMG_RGBF32: 3 floats a pixel (the host's), unclamped: the renderer's
+ *               RENDER_RGBF32 pixels (common/render.h), which
+ *               portray-master renders for png16, PFM and OpenEXR.
  */
 enum img_pixel_type { IMG_RGB8, IMG_RGBF32 };
 
 enum img_format {
 	IMG_PNG,      /* 8 bits a channel, sRGB chunks, text */
-	IMG_PNG16,    /* 16 bits a channel (8-bit values times 257), sBIT 8 */
+	IMG_PNG16,    /* 16 bits a channel: floats in 65535 steps; 8-bit values times 257, sBIT 8 */
 	IMG_PPM,      /* binary P6, maxval 255, no metadata */
 	IMG_PFM,      /* PF, little-endian float32, rows bottom to top, linear */
 	IMG_EXR,      /* OpenEXR, scan lines, FLOAT channels, no compression, linear */

@@ -7,7 +7,9 @@
  * "Output formats"), and write them decoded to linear light with sRGB's
  * exact inverse transfer function, the convention for both formats. From
  * RGB8, the value of byte v is v/255 before decoding; encoding a file's
- * value again and rounding to 8 bits gives v back (test_imgfmt).
+ * value again and rounding to 8 bits gives v back (test_imgfmt). From
+ * RGBF32 (what portray-master gives them: the renderer's floats before
+ * clamping), each value is decoded as it is, below 0 and above 1 included.
  *
  * PFM: "PF\n<w> <h>\n-1.0\n", then float32 R G B triples, little-endian
  * (the negative scale says so), rows from the bottom of the image up.

@@ -33,7 +33,7 @@ cmp "$T/local.ppm" "$T/farm3.ppm" || fail "farm image via --workers-file differs
 
 # the worker's own command line
 "$BIN/portray-worker" --help | grep -q -- "--cache-mb" || fail "worker --help"
-"$BIN/portray-worker" --version | grep -q "protocol 2" || fail "worker --version"
+"$BIN/portray-worker" --version | grep -q "protocol 3" || fail "worker --version"
 "$BIN/portray-worker" --bogus 2>/dev/null
 [ $? -eq 64 ] || fail "worker: unknown option should exit 64"
 

@@ -34,9 +34,9 @@ wait_for "$T/s.log" "refused: this worker requires a shared secret" "the worker'
 # protocol version mismatch
 "$BIN/portray-master" "$SCENE" -o "$T/x.ppm" --no-local -w "127.0.0.1:$v_PORT" 2>"$T/m3.log"
 [ $? -eq 69 ] || fail "version mismatch: wrong exit code"
-grep -q "protocol version mismatch: the worker speaks version 3, this master speaks 2" "$T/m3.log" ||
+grep -q "protocol version mismatch: the worker speaks version 4, this master speaks 3" "$T/m3.log" ||
 	fail "version mismatch: master message unclear"
-wait_for "$T/v.log" "refused: protocol version mismatch: the master speaks version 2, this worker speaks 3" \
+wait_for "$T/v.log" "refused: protocol version mismatch: the master speaks version 3, this worker speaks 4" \
 	"the worker's version mismatch message"
 
 # another core build: its pixels could differ

@@ -235,8 +235,8 @@ static int on_message(struct fp_conn *c, const struct proto_msg *m)
 		break;
 	case MSG_TILE:
 		c->n_tiles++;
-		fp_log("%s: received TILE %u (%u,%u %ux%u)", c->peer, m->u.tile.id, m->u.tile.x, m->u.tile.y,
-		       m->u.tile.w, m->u.tile.h);
+		fp_log("%s: received TILE %u (%u,%u %ux%u, %s pixels)", c->peer, m->u.tile.id, m->u.tile.x, m->u.tile.y,
+		       m->u.tile.w, m->u.tile.h, m->u.tile.px ? "RGBF32" : "RGB8");
 		break;
 	default: fp_log("%s: received %s", c->peer, proto_type_name(m->type)); break;
 	}
