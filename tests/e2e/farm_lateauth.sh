@@ -39,14 +39,15 @@ def frame():
             sys.exit(0)
         buf += d
 def send(typ, p):
-    c.sendall(struct.pack('>IHHI', 0x50524159, 2, typ, len(p)) + p)
+    c.sendall(struct.pack('>IHHI', 0x50524159, ver, typ, len(p)) + p)
 typ, p = frame()
 assert typ == 1, typ
+ver = struct.unpack('>I', p[:4])[0]  # the master's protocol version: spoken back
 mnonce = p[12:44]
 blen = struct.unpack('>I', p[44:48])[0]
 build = p[48:48 + blen]
 wnonce = os.urandom(32)
-send(1, struct.pack('>IBBHI', 2, 2, 1, 1, 0) + wnonce + struct.pack('>I', len(build)) + build)
+send(1, struct.pack('>IBBHI', ver, 2, 1, 1, 0) + wnonce + struct.pack('>I', len(build)) + build)
 typ, p = frame()
 assert typ == 2, typ
 while not os.path.getsize(pid_file):
