@@ -4,7 +4,8 @@
 #    at (its log says what it received: the master's HELLO, AUTH, the offer
 #    (sent only after the master checked the fake's HELLO and proof), the
 #    whole scene with the right hash, tiles), and a master with local threads
-#    finishes the render anyway, identical to the local one;
+#    finishes the render anyway, identical to the local one; `wrong-type`
+#    (results in the other pixel type) is dropped for it, both ways;
 #  - with --no-local, the stalls the master already has a deadline for:
 #    `silent` (no frame: heartbeat timeout) and `stall-tile` (the hung-tile
 #    deadline) end with exit 69. The other modes make today's master wait
@@ -44,7 +45,20 @@ stall-offer     received.SCENE_OFFER          --secret-file $T/secret
 stall-data      sent.SCENE_NEED;.not.reading
 stall-build     scene.complete:.*hash.ok
 stall-tile      received.TILE
+wrong-type      answered.TILE.[0-9]*.with.RGBF32.pixels
 MODES
+
+# a result in the other pixel type than its TILE asked for is a protocol
+# error (whatever its checksum): 8-bit asked, floats answered, and back
+grep -q "worker 127.0.0.1:$wrongtype_PORT dropped: tile [0-9]* came back with pixel type 1, sent with 0" \
+	"$T/m_wrongtype.log" || fail "wrong-type: floats for an 8-bit tile not refused: $(cat "$T/m_wrongtype.log")"
+local_render "$SLOW" "$T/local.pfm" --size 192x144
+timeout 60 "$BIN/portray-master" "$SLOW" --size 192x144 --tile 16 -j 1 -o "$T/wrongtype.pfm" \
+	-w "127.0.0.1:$wrongtype_PORT" 2>"$T/m_wrongtype2.log" || fail "wrong-type, PFM: the render failed (exit $?)"
+cmp "$T/local.pfm" "$T/wrongtype.pfm" || fail "wrong-type, PFM: the image differs from the local render"
+grep -q "worker 127.0.0.1:$wrongtype_PORT dropped: tile [0-9]* came back with pixel type 0, sent with 1" \
+	"$T/m_wrongtype2.log" || fail "wrong-type: 8-bit pixels for a float tile not refused"
+echo "ok   wrong-type: refused both ways"
 
 # --no-local: the deadlines today's master has
 timeout 60 "$BIN/portray-master" "$SCENE" -o "$T/x.ppm" --no-local --heartbeat-timeout 0.5 \

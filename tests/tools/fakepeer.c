@@ -27,6 +27,9 @@
  *                   socket again (HEARTBEATs go on)
  *   stall-build     receives the whole scene, never sends SCENE_READY
  *   stall-tile      SCENE_READY, then takes TILEs and never answers them
+ *   wrong-type      SCENE_READY, then answers every TILE at once with black
+ *                   pixels of the other pixel type (RGBF32 for RGB8 and back;
+ *                   the checksum right): a protocol error for the master
  * --secret sets the HELLO's secret flag without knowing a secret (enough for
  * stall-hello and stall-auth); --secret-file F is a real one (F as for
  * portray-worker). It logs on stderr a line per connection accepted and
@@ -106,17 +109,19 @@ struct fp_mode {
 	const char *name;
 	bool hello, heartbeat;
 	enum fp_stage stall;
+	bool wrong_type; /* answers TILEs with the other pixel type (at its stall, READY) */
 };
 
 static const struct fp_mode modes[] = {
-	{ "silent", false, false, FS_HELLO },
-	{ "heartbeat-only", false, true, FS_HELLO },
-	{ "stall-hello", true, true, FS_HELLO },
-	{ "stall-auth", true, true, FS_AUTH },
-	{ "stall-offer", true, true, FS_OFFER },
-	{ "stall-data", true, true, FS_RECV },
-	{ "stall-build", true, true, FS_BUILD },
-	{ "stall-tile", true, true, FS_READY },
+	{ "silent", false, false, FS_HELLO, false },
+	{ "heartbeat-only", false, true, FS_HELLO, false },
+	{ "stall-hello", true, true, FS_HELLO, false },
+	{ "stall-auth", true, true, FS_AUTH, false },
+	{ "stall-offer", true, true, FS_OFFER, false },
+	{ "stall-data", true, true, FS_RECV, false },
+	{ "stall-build", true, true, FS_BUILD, false },
+	{ "stall-tile", true, true, FS_READY, false },
+	{ "wrong-type", true, true, FS_READY, true },
 };
 
 static struct {
@@ -237,6 +242,17 @@ static int on_message(struct fp_conn *c, const struct proto_msg *m)
 		c->n_tiles++;
 		fp_log("%s: received TILE %u (%u,%u %ux%u, %s pixels)", c->peer, m->u.tile.id, m->u.tile.x, m->u.tile.y,
 		       m->u.tile.w, m->u.tile.h, m->u.tile.px ? "RGBF32" : "RGB8");
+		if (wopt.mode->wrong_type && c->stage == FS_READY) {
+			struct proto_tile t = m->u.tile;
+			t.px = t.px ? 0 : 1;
+			size_t n = proto_tile_bytes(&t);
+			uint8_t *px = calloc(1, n);
+			if (!px)
+				return -1;
+			proto_send_result(c->pc, &t, px, crc32_update(0, px, n));
+			free(px);
+			fp_log("%s: answered TILE %u with %s pixels", c->peer, t.id, t.px ? "RGBF32" : "RGB8");
+		}
 		break;
 	default: fp_log("%s: received %s", c->peer, proto_type_name(m->type)); break;
 	}
