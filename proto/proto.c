@@ -204,7 +204,8 @@ _Static_assert(RENDER_RGB8 == 0 && RENDER_RGBF32 == 1, "the wire's pixel types a
 static int tile_ok(const struct proto_tile *t)
 {
 	return t->px <= RENDER_RGBF32 && t->w >= 1 && t->h >= 1 && t->w <= LIM_TILE_PIXELS &&
-	       t->h <= LIM_TILE_PIXELS && (uint64_t)t->w * t->h <= LIM_TILE_PIXELS && t->x <= UINT32_MAX - t->w && t->y <= UINT32_MAX - t->h;
+	       t->h <= LIM_TILE_PIXELS && (uint64_t)t->w * t->h <= LIM_TILE_PIXELS && t->x <= UINT32_MAX - t->w &&
+	       t->y <= UINT32_MAX - t->h;
 }
 
 static void get_tile(struct proto_rbuf *r, struct proto_tile *t)

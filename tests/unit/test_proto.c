@@ -238,7 +238,7 @@ static void test_bad_frames(void)
 	memset(f + 12, 0, 48);
 	proto_wr32(f + 12 + 40, 10), proto_wr32(f + 12 + 44, 10);
 	CHECK(raw_frame(f, 60, &m, &code, &why) == -1 && strstr(why, "scene size"));
-	/* a declared length is never allocated up front: a 4 MiB frame that
+	/* a declared length is never allocated up front: a 13 MiB frame that
 	 * never arrives costs only what did arrive */
 	pair();
 	put_header(f, PROTO_MAGIC, PROTO_VERSION, MSG_SCENE_DATA, LIM_FRAME_PAYLOAD);
