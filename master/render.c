@@ -16,6 +16,7 @@
 #include "common/img.h"
 #include "common/parse.h"
 #include "common/render.h"
+#include "common/tiles.h"
 #include "master/farm.h"
 #include "master/interrupt.h"
 #include "master/master.h"
@@ -174,6 +175,7 @@ int master_render(const struct master_opts *o)
 		fprintf(stderr, "%s\n", err.msg);
 		goto done;
 	}
+	master_preview_apply(o, s); /* before the encoding: the workers trace the same */
 	master_filter_warnings(&s->camera);
 	double t_parse = progress_now();
 
@@ -212,6 +214,9 @@ int master_render(const struct master_opts *o)
 	}
 	uint32_t w, h;
 	renderer_size(r, &w, &h);
+	rc = master_region_check(o, w, h);
+	if (rc)
+		goto done;
 	double t_build = progress_now();
 
 	image = calloc((size_t)w * h, 3); /* unfinished pixels stay black */
@@ -225,7 +230,12 @@ int master_render(const struct master_opts *o)
 	atomic_init(&cancel, 0);
 	interrupt_start(&cancel, !ds->image.nonstop);
 	watching = true;
-	uint64_t total = render_tile_count(w, h, o->tile);
+	struct tiling tg; /* as farm_render cuts it */
+	if (o->region)
+		tiling_init_region(&tg, w, h, o->tile, o->rx0, o->ry0, o->rx1, o->ry1);
+	else
+		tiling_init(&tg, w, h, o->tile);
+	uint64_t total = tg.n;
 	uint32_t finished = 0;
 	int threads = o->threads > 0 ? o->threads : render_ncpus();
 	bool farm = o->workers || o->workers_file || o->accept;
@@ -247,6 +257,14 @@ int master_render(const struct master_opts *o)
 	}
 	struct img_text texts[4];
 	struct img_desc desc = { .w = w, .h = h, .type = IMG_RGB8, .pixels = image, .format = fmt, .text = texts };
+	if (o->region) {
+		/* a cropped file: the region's rows moved to the front, in place */
+		uint32_t rw = o->rx1 - o->rx0, rh = o->ry1 - o->ry0;
+		for (uint32_t y = 0; y < rh; y++)
+			memmove(image + (size_t)y * rw * 3, image + ((size_t)(o->ry0 + y) * w + o->rx0) * 3, (size_t)rw * 3);
+		desc.w = rw;
+		desc.h = rh;
+	}
 	desc.n_text = output_texts(o, t_render - t0, partial ? partial_why : NULL, texts, bufs);
 	if (img_write_opts(out, &desc) < 0) {
 		fprintf(stderr, "portray-master: cannot write %s: %s\n", shown(out), strerror(errno));
