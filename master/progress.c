@@ -17,8 +17,6 @@
 #define BAR_CELLS_MIN 8
 /* a worker's name abbreviated to this many characters at most */
 #define NAME_SHORT 14
-/* layouts, richest first (progress_format) */
-#define LAYOUTS 6
 
 double progress_now(void)
 {
@@ -215,30 +213,42 @@ static size_t layout(const struct progress *p, double now, int k, const struct p
 	return b.len;
 }
 
+/* The order layouts are tried in: (layout, with a bar). A bar with shorter
+ * words beats whole words without one; a farm's workers beat the bar. */
+static const struct {
+	int k;
+	bool bar;
+} tries[] = { { 0, true }, { 1, true }, { 0, false }, { 1, false }, { 2, true }, { 2, false },
+	      { 3, true }, { 3, false }, { 4, true }, { 4, false }, { 5, true }, { 5, false } };
+
 size_t progress_format(const struct progress *p, double now, int cols, const struct progress_farm *farm, char *buf,
 		       size_t n)
 {
 	char text[PROGRESS_LINE_MAX];
 	size_t limit = cols > 0 ? (size_t)cols : SIZE_MAX;
+	size_t n_tries = sizeof tries / sizeof tries[0];
 	if (n == 0)
 		return 0;
-	for (int k = 0; k < LAYOUTS; k++) {
-		size_t bar_at, len = layout(p, now, k, farm, text, sizeof text, &bar_at);
+	for (size_t i = 0; i < n_tries; i++) {
+		size_t bar_at, len = layout(p, now, tries[i].k, farm, text, sizeof text, &bar_at);
 		/* the bar when it fits with at least BAR_CELLS_MIN cells */
 		size_t room = limit > len ? limit - len : 0;
 		int cells = 0;
-		if (room >= BAR_CELLS_MIN + 3) /* "[" cells "] " */
+		if (tries[i].bar) {
+			if (room < BAR_CELLS_MIN + 3) /* "[" cells "] " */
+				continue;
 			cells = room - 3 > BAR_CELLS_MAX ? BAR_CELLS_MAX : (int)(room - 3);
-		if (len > limit && k < LAYOUTS - 1)
+		} else if (len > limit && i < n_tries - 1) {
 			continue;
+		}
 		struct sbuf b = { buf, n, 0 };
 		buf[0] = '\0';
 		sb_add(&b, "%.*s", (int)bar_at, text);
 		if (cells > 0) {
 			int full = p->total ? (int)((double)p->done / (double)p->total * cells) : cells;
 			sb_add(&b, "[");
-			for (int i = 0; i < cells; i++)
-				sb_add(&b, "%c", i < full ? '#' : '.');
+			for (int c = 0; c < cells; c++)
+				sb_add(&b, "%c", c < full ? '#' : '.');
 			sb_add(&b, "] ");
 		}
 		sb_add(&b, "%s", text + bar_at);
@@ -248,7 +258,7 @@ size_t progress_format(const struct progress *p, double now, int cols, const str
 		}
 		return b.len;
 	}
-	return 0; /* not reached */
+	return 0; /* not reached: the last try always returns */
 }
 
 int progress_columns(void)
