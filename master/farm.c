@@ -563,6 +563,12 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	struct tile_source src = { local_take, local_done, &L };
 	f.src = &src;
 	f.n_threads = n_threads;
+	if (o->min_workers && !o->accept && f.n_w < o->min_workers) {
+		farm_log(&f, "--min-workers %u: only %u worker%s named (addresses included); no image written",
+			 o->min_workers, f.n_w, f.n_w == 1 ? "" : "s");
+		rc = EXIT_TOO_FEW;
+		goto out;
+	}
 	for (uint32_t i = 0; i < f.n_w; i++)
 		worker_start(&f.w[i]);
 	/* with --min-workers the local threads wait for the workers (join_check) */
@@ -582,11 +588,6 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 		ev_timer_arm(f.loop, &f.progress, net_now() + FARM_PROGRESS_TICK_S);
 	}
 	farm_check_alive(&f); /* every worker may have failed at once */
-	if (f.rc == 0 && o->min_workers && !o->accept && f.n_w < o->min_workers) {
-		farm_log(&f, "--min-workers %u: only %u worker%s named (addresses included); no image written",
-			 o->min_workers, f.n_w, f.n_w == 1 ? "" : "s");
-		f.rc = EXIT_TOO_FEW;
-	}
 	if (f.rc == 0 && !atomic_load(cancel) && !sched_finished(f.s) && ev_run(f.loop) < 0)
 		fprintf(stderr, "portray-master: poll: %s\n", strerror(errno));
 	rc = f.rc;

@@ -286,10 +286,16 @@ int master_render(const struct master_opts *o)
 	} else if (!o->quiet && !farm) {
 		double tr = t_render - t_build;
 		uint64_t rays = renderer_rays(r);
+		char size[96];
+		if (o->region)
+			snprintf(size, sizeof size, "%ux%u (region %u,%u,%u,%u of %ux%u)", desc.w, desc.h, o->rx0, o->ry0,
+				 o->rx1, o->ry1, w, h);
+		else
+			snprintf(size, sizeof size, "%ux%u", w, h);
 		fprintf(stderr,
-			"portray-master: %s: %ux%u, %d thread%s, %llu tiles, %.3f s (parse %.3f, build %.3f, "
+			"portray-master: %s: %s, %d thread%s, %llu tiles, %.3f s (parse %.3f, build %.3f, "
 			"trace %.3f), %llu eye rays, %.2f Mrays/s\n",
-			shown(out), w, h, threads, threads == 1 ? "" : "s", (unsigned long long)total,
+			shown(out), size, threads, threads == 1 ? "" : "s", (unsigned long long)total,
 			t_render - t0, t_parse - t0, t_build - t_parse, tr, (unsigned long long)rays,
 			tr > 0 ? rays / tr * 1e-6 : 0.0);
 	}
