@@ -5,6 +5,8 @@
 #   the same, no image written;
 #   more workers asked for than named: exit 75 at once;
 #   --accept with nobody dialling in: exit 75 after --join-timeout;
+#   --accept and a worker dialling in a second late: it joins, the local
+#   threads start then, the image is the local one;
 #   enough workers: the render succeeds, the same bytes as a local render,
 #   and its piped progress lines name the workers;
 #   --min-workers without workers: usage error (64);
@@ -57,6 +59,20 @@ rc=$?
 [ $rc -eq 75 ] || fail "--accept, nobody: exit $rc, want 75"
 within 10 "$t0" || fail "--join-timeout 1 took $(elapsed "$t0") s"
 grep -q -- "--join-timeout passed" "$T/m4.log" || fail "no reason for the timeout"
+
+# --accept: a worker dials in late, the render waits for it
+P=$(free_port)
+"$BIN/portray-master" "$SCENE" -o "$T/acc.ppm" --min-workers 1 --join-timeout 60 --accept "127.0.0.1:$P" \
+	--progress-interval 0 2>"$T/m8.log" &
+M=$!
+PIDS="$PIDS $M"
+sleep 1
+kill -0 $M 2>/dev/null || fail "the master did not wait for a worker to dial in"
+start_dialer late "127.0.0.1:$P" -j 1
+wait $M || fail "--min-workers 1 with a worker dialling in failed (exit $?)"
+local_render "$SCENE" "$T/local_acc.ppm"
+cmp "$T/local_acc.ppm" "$T/acc.ppm" || fail "image differs with a worker dialling in"
+grep -q "1 worker joined (--min-workers 1): the local threads start" "$T/m8.log" || fail "no word of the join"
 
 # enough workers: success, the same bytes; piped progress lines name them
 local_render "$SLOW" "$T/local.ppm" --size 320x240
