@@ -65,6 +65,8 @@ void farm_log_limited(struct farm *f, const char *fmt, ...)
 	farm_log(f, "%s", line);
 }
 
+static void join_check(struct farm *f);
+
 void farm_check_alive(struct farm *f)
 {
 	if (!f->o->no_local)
@@ -72,6 +74,11 @@ void farm_check_alive(struct farm *f)
 	for (uint32_t i = 0; i < f->n_w; i++)
 		if (!f->w[i].dropped)
 			return;
+	if (f->o->min_workers && !f->joined_enough) {
+		join_check(f); /* too few joined: --min-workers' verdict (75), not 69 */
+		if (f->rc)
+			return;
+	}
 	if (f->lfd >= 0) {
 		/* workers may still dial in: wait for them */
 		if (!f->said_waiting)
@@ -569,16 +576,16 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 		rc = EXIT_TOO_FEW;
 		goto out;
 	}
+	/* before the workers start: one failing at once already asks join_check */
+	f.join_deadline = f.t0 + o->join_timeout_s;
+	ev_timer_init(&f.join, on_join, &f);
 	for (uint32_t i = 0; i < f.n_w; i++)
 		worker_start(&f.w[i]);
 	/* with --min-workers the local threads wait for the workers (join_check) */
 	if (!(o->min_workers && !o->no_local) && local_start(&f) < 0)
 		goto out;
-	if (o->min_workers) {
-		f.join_deadline = f.t0 + o->join_timeout_s;
-		ev_timer_init(&f.join, on_join, &f);
+	if (o->min_workers)
 		join_check(&f);
-	}
 	enum progress_mode pm = progress_mode_for(o->quiet);
 	if (pm == PROGRESS_LINES && o->progress_interval == 0)
 		pm = PROGRESS_OFF;

@@ -47,11 +47,11 @@ static void usage(FILE *f)
 		"                           them (default 0.03; 0: no audits; see docs/protocol.md)\n"
 		"      --progress-interval S  seconds between progress lines when stderr is not a\n"
 		"                           terminal (default 10; 0: none; on a terminal: a bar)\n"
-		"      --min-workers N      exit 75 unless N workers join (handshake, scene sent and\n"
-		"                           built); the local threads wait for them\n"
+		"      --min-workers N      exit 75 unless N workers join (get ready to trace);\n"
+		"                           the local threads wait for them\n"
 		"      --join-timeout S     how long --min-workers waits for them (default 30)\n"
-		"      --region X0,Y0,X1,Y1 render only pixels X0..X1-1, Y0..Y1-1, written as a cropped\n"
-		"                           image; the same pixels as a full render's\n"
+		"      --region X0,Y0,X1,Y1 only the pixels X0..X1-1, Y0..Y1-1, into a cropped\n"
+		"                           image (the same bytes as a full render's)\n"
 		"      --preview            quick look: --no-aa --no-shadows --no-reflections\n"
 		"      --no-aa              one ray a pixel: the standard filter alone\n"
 		"      --no-shadows         no light casts shadows\n"
@@ -61,8 +61,8 @@ static void usage(FILE *f)
 		"\n"
 		"Exit status: 0 success; 1 and 2 the PortRAY manual's error levels (Appendix B);\n"
 		"64 usage (an unknown output extension too); 69 no worker left with --no-local; 74 output\n"
-		"not written (a missing or read-only directory is found before rendering); 75 fewer than\n"
-		"--min-workers workers joined.\n",
+		"not written (a missing or read-only directory is found before rendering);\n"
+		"75 fewer workers joined than --min-workers.\n",
 		TILE_DEFAULT);
 }
 

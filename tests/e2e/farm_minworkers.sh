@@ -34,6 +34,11 @@ grep -q -- "--min-workers 1: only 0 workers joined (every worker named failed); 
 	fail "no reason given for exit 75"
 [ -e "$T/x.ppm" ] && fail "an image was written after too few workers joined"
 
+# with --no-local too: --min-workers' verdict (75), not "every worker lost" (69)
+"$BIN/portray-master" "$SCENE" -o "$T/x.ppm" -q --no-local --min-workers 1 -w "127.0.0.1:$DEAD" 2>"$T/m9.log"
+rc=$?
+[ $rc -eq 75 ] || fail "--no-local --min-workers 1, nobody: exit $rc, want 75"
+
 # more asked for than named (two addresses): at once
 t0=$(now)
 "$BIN/portray-master" "$SCENE" -o "$T/x.ppm" --min-workers 3 -w "127.0.0.1:$a_PORT,127.0.0.1:$b_PORT" \
