@@ -12,7 +12,8 @@
  * enough that a mistaken -j cannot exhaust the process. */
 #define POOL_MAX_THREADS 1024
 
-void tiling_init(struct tiling *tg, uint32_t w, uint32_t h, uint32_t side)
+void tiling_init_region(struct tiling *tg, uint32_t w, uint32_t h, uint32_t side, uint32_t x0, uint32_t y0,
+			uint32_t x1, uint32_t y1)
 {
 	if (side == 0)
 		side = TILE_DEFAULT;
@@ -21,18 +22,27 @@ void tiling_init(struct tiling *tg, uint32_t w, uint32_t h, uint32_t side)
 	tg->w = w;
 	tg->h = h;
 	tg->side = side;
-	tg->nx = (w + side - 1) / side;
-	tg->ny = (h + side - 1) / side;
+	tg->x0 = x0;
+	tg->y0 = y0;
+	tg->x1 = x1;
+	tg->y1 = y1;
+	tg->nx = (x1 - x0 + side - 1) / side;
+	tg->ny = (y1 - y0 + side - 1) / side;
 	tg->n = tg->nx * tg->ny; /* at most 65536^2 / 1: limits.h caps images far below */
+}
+
+void tiling_init(struct tiling *tg, uint32_t w, uint32_t h, uint32_t side)
+{
+	tiling_init_region(tg, w, h, side, 0, 0, w, h);
 }
 
 struct tile_rect tiling_rect(const struct tiling *tg, uint32_t i)
 {
 	struct tile_rect r;
-	r.x = (i % tg->nx) * tg->side;
-	r.y = (i / tg->nx) * tg->side;
-	r.w = tg->w - r.x < tg->side ? tg->w - r.x : tg->side;
-	r.h = tg->h - r.y < tg->side ? tg->h - r.y : tg->side;
+	r.x = tg->x0 + (i % tg->nx) * tg->side;
+	r.y = tg->y0 + (i / tg->nx) * tg->side;
+	r.w = tg->x1 - r.x < tg->side ? tg->x1 - r.x : tg->side;
+	r.h = tg->y1 - r.y < tg->side ? tg->y1 - r.y : tg->side;
 	return r;
 }
 

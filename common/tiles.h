@@ -26,14 +26,21 @@
 #define TILE_MAX_SIDE 1024u
 
 /* An image cut into square tiles of side `side`, row-major, the last
- * column and row narrower where the image ends. */
+ * column and row narrower where the image ends. A tiling may cover a
+ * region of the image only (--region): its tiles start at (x0, y0) and end
+ * at x1, y1; their rectangles stay in the whole image's coordinates. */
 struct tiling {
-	uint32_t w, h, side;
+	uint32_t w, h, side;    /* w x h: the whole image */
 	uint32_t nx, ny, n;     /* tiles across, down, in all */
+	uint32_t x0, y0, x1, y1; /* the region covered (x1, y1 excluded): 0, 0, w, h unless a region */
 };
 
 /* Cuts w x h into tiles of side (0: TILE_DEFAULT; clamped to 1..TILE_MAX_SIDE). */
 void tiling_init(struct tiling *tg, uint32_t w, uint32_t h, uint32_t side);
+/* Cuts the region x0..x1-1, y0..y1-1 of a w x h image (the caller checked it
+ * is inside and not empty) into tiles of side, the first at (x0, y0). */
+void tiling_init_region(struct tiling *tg, uint32_t w, uint32_t h, uint32_t side, uint32_t x0, uint32_t y0,
+			uint32_t x1, uint32_t y1);
 /* Rectangle of tile i (i < tg->n). */
 struct tile_rect tiling_rect(const struct tiling *tg, uint32_t i);
 

@@ -65,6 +65,8 @@ void farm_log_limited(struct farm *f, const char *fmt, ...)
 	farm_log(f, "%s", line);
 }
 
+static void join_check(struct farm *f);
+
 void farm_check_alive(struct farm *f)
 {
 	if (!f->o->no_local)
@@ -72,6 +74,11 @@ void farm_check_alive(struct farm *f)
 	for (uint32_t i = 0; i < f->n_w; i++)
 		if (!f->w[i].dropped)
 			return;
+	if (f->o->min_workers && !f->joined_enough) {
+		join_check(f); /* too few joined: --min-workers' verdict (75), not 69 */
+		if (f->rc)
+			return;
+	}
 	if (f->lfd >= 0) {
 		/* workers may still dial in: wait for them */
 		if (!f->said_waiting)
@@ -233,29 +240,89 @@ static void local_done(void *ctx, const struct tile_work *w, uint8_t **rgb, int 
 	}
 }
 
-/* ---- progress and summary ---- */
-
-static void progress_draw(struct farm *f)
+/* Starts the local threads (none with --no-local and no audits). 0, or -1
+ * with a message printed. */
+static int local_start(struct farm *f)
 {
-	double now = net_now();
-	struct sched_stats st;
-	sched_stats(f->s, &st);
-	if (!f->farmed) {
-		progress_update(&f->bar, st.done);
+	if (f->n_threads > 0 && !f->pool && !(f->pool = tile_pool_start(f->n_threads, f->src))) {
+		fprintf(stderr, "portray-master: cannot start a local thread\n");
+		return -1;
+	}
+	return 0;
+}
+
+/* ---- --min-workers: the workers that joined ---- */
+
+/*
+ * A worker joined once it is ready to trace: handshake passed, scene
+ * transferred (or found in its cache) and built; one that delivered a tile
+ * counts even if lost since. When min_workers joined, the local threads
+ * start (tiles went to the joined workers meanwhile); when that can no
+ * longer happen (every worker named joined or failed for good and nobody
+ * may dial in, or --join-timeout passed) the loop ends with EXIT_TOO_FEW.
+ */
+static void join_check(struct farm *f)
+{
+	const struct master_opts *o = f->o;
+	if (!o->min_workers || f->joined_enough || f->rc)
+		return;
+	uint32_t joined = 0, pending = 0;
+	for (uint32_t i = 0; i < f->n_w; i++) {
+		struct worker *w = &f->w[i];
+		if (w->accepted && !w->spoke)
+			continue;
+		if (w->state == W_READY || w->tiles_done > 0)
+			w->joined = true;
+		if (w->joined)
+			joined++;
+		else if (!w->dropped)
+			pending++;
+	}
+	f->n_joined = joined;
+	if (joined >= o->min_workers) {
+		f->joined_enough = true;
+		if (!o->quiet)
+			farm_log(f, "%u worker%s joined (--min-workers %u)%s", joined, joined == 1 ? "" : "s",
+				 o->min_workers, o->no_local ? "" : ": the local threads start");
+		if (local_start(f) < 0) {
+			f->rc = ERRLEVEL_FATAL;
+			ev_stop(f->loop);
+		}
 		return;
 	}
-	double el = now - f->t0;
-	char eta[32] = "?";
-	if (st.done > 0 && st.done < st.n)
-		snprintf(eta, sizeof eta, "%.0fs", el * (st.n - st.done) / st.done);
-	else if (st.done == st.n)
-		snprintf(eta, sizeof eta, "0s");
-	char line[512];
-	int len = snprintf(line, sizeof line, "farm %u/%u tiles %3.0f%% ETA %s | local %.1f t/s", st.done, st.n,
-			   100.0 * st.done / st.n, eta, el > 0 ? st.local_done / el : 0.0);
-	for (uint32_t i = 0; i < f->n_w && len < (int)sizeof line - 40; i++) {
+	double now = net_now();
+	const char *why = NULL;
+	if (f->lfd < 0 && pending == 0)
+		why = joined ? "the other workers named failed" : "every worker named failed";
+	else if (now >= f->join_deadline)
+		why = "--join-timeout passed";
+	if (why) {
+		farm_log(f, "--min-workers %u: only %u worker%s joined (%s); no image written", o->min_workers,
+			 joined, joined == 1 ? "" : "s", why);
+		f->rc = EXIT_TOO_FEW;
+		ev_stop(f->loop);
+		return;
+	}
+	ev_timer_arm(f->loop, &f->join, now + FARM_JOIN_TICK_S);
+}
+
+static void on_join(struct ev_loop *l, void *arg)
+{
+	(void)l;
+	join_check(arg);
+}
+
+/* ---- progress and summary ---- */
+
+/* The line's farm part: each worker's rate over its last second or so. NULL
+ * for a local render. */
+static const struct progress_farm *progress_farm(struct farm *f, double now, struct progress_farm *pf)
+{
+	if (!f->farmed)
+		return NULL;
+	uint32_t n = 0;
+	for (uint32_t i = 0; i < f->n_w; i++) {
 		struct worker *w = &f->w[i];
-		/* a recent rate: tiles over the last second or so */
 		double dt = now - w->rate_t0;
 		if (dt >= 1.0 || w->rate_t0 == 0) {
 			if (w->rate_t0 > 0)
@@ -263,29 +330,51 @@ static void progress_draw(struct farm *f)
 			w->rate_t0 = now;
 			w->rate_n0 = w->tiles_done;
 		}
-		len += snprintf(line + len, sizeof line - (size_t)len, " | %s %.1f t/s%s", w->name, w->rate,
-				w->dropped ? " (dropped)" : w->state == W_READY ? "" : " (-)");
+		if (w->accepted && !w->spoke)
+			continue; /* dialled in, not (yet) a worker */
+		f->peers[n++] = (struct progress_peer){ w->name, w->rate, w->state == W_READY, w->dropped };
 	}
-	fprintf(stderr, "\r\033[K%s", line);
+	struct sched_stats st;
+	sched_stats(f->s, &st);
+	double dt = now - f->local_t0;
+	if (dt >= 1.0 || f->local_t0 == 0) {
+		if (f->local_t0 > 0)
+			f->local_rate = (st.local_done - f->local_n0) / dt;
+		f->local_t0 = now;
+		f->local_n0 = st.local_done;
+	}
+	*pf = (struct progress_farm){ f->local_rate, f->peers, n };
+	return pf;
+}
+
+static void progress_draw(struct farm *f)
+{
+	double now = net_now();
+	struct sched_stats st;
+	struct progress_farm pf;
+	const struct progress_farm *fp = progress_farm(f, now, &pf);
+	sched_stats(f->s, &st);
+	progress_show(&f->bar, st.done, now, fp);
 }
 
 static void on_progress(struct ev_loop *l, void *arg)
 {
 	struct farm *f = arg;
 	progress_draw(f);
-	ev_timer_arm(l, &f->progress, net_now() + 0.25);
+	ev_timer_arm(l, &f->progress, net_now() + FARM_PROGRESS_TICK_S);
 }
 
 static void summary(struct farm *f)
 {
-	if (f->tty && !f->farmed)
-		progress_end(&f->bar);
-	else if (f->tty)
-		fputs("\r\033[K", stderr);
-	if (f->o->quiet || !f->farmed)
-		return; /* a local render's summary is render.c's one line */
 	struct sched_stats st;
 	sched_stats(f->s, &st);
+	if (f->bar.mode != PROGRESS_OFF) {
+		struct progress_farm pf;
+		double now = net_now();
+		progress_finish(&f->bar, st.done, now, progress_farm(f, now, &pf));
+	}
+	if (f->o->quiet || !f->farmed)
+		return; /* a local render's summary is render.c's one line */
 	double el = net_now() - f->t0;
 	uint64_t sent = 0, scene = 0;
 	for (uint32_t i = 0; i < f->n_w; i++) {
@@ -424,7 +513,6 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	f.lfd = -1;
 	int rc = EXIT_USAGE;
 	struct worker_addr *addrs = NULL;
-	struct tile_pool *pool = NULL;
 	struct local L;
 	char err[600];
 
@@ -450,7 +538,10 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 		goto out;
 	}
 	proto_scene_hash(scene, scene_len, f.hash);
-	tiling_init(&f.tg, w, h, o->tile);
+	if (o->region) /* render.c checked it is inside the image */
+		tiling_init_region(&f.tg, w, h, o->tile, o->rx0, o->ry0, o->rx1, o->ry1);
+	else
+		tiling_init(&f.tg, w, h, o->tile);
 	/* audits: random per render, so a worker cannot tell which tiles are sampled */
 	uint64_t salt = 0;
 	if (o->audit > 0 && proto_random((uint8_t *)&salt, sizeof salt) < 0)
@@ -459,7 +550,8 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	f.loop = ev_new();
 	f.s = f.loop ? sched_new(&f.tg, render_pixel_bytes(px), f.cap_w, image, o->audit, salt, wake_loop, &f) : NULL;
 	f.w = calloc(f.cap_w, sizeof *f.w);
-	if (!f.loop || !f.s || !f.w) {
+	f.peers = calloc(f.cap_w ? f.cap_w : 1, sizeof *f.peers);
+	if (!f.loop || !f.s || !f.w || !f.peers) {
 		fprintf(stderr, "portray-master: out of memory for %u tiles\n", f.tg.n);
 		goto out;
 	}
@@ -478,28 +570,41 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	L = (struct local){ .f = &f, .r = r, .audit_only = o->no_local };
 	atomic_init(&L.oom, 0);
 	struct tile_source src = { local_take, local_done, &L };
-	for (uint32_t i = 0; i < f.n_w; i++)
-		worker_start(&f.w[i]);
-	if (n_threads > 0 && !(pool = tile_pool_start(n_threads, &src))) {
-		fprintf(stderr, "portray-master: cannot start a local thread\n");
+	f.src = &src;
+	f.n_threads = n_threads;
+	if (o->min_workers && !o->accept && f.n_w < o->min_workers) {
+		farm_log(&f, "--min-workers %u: only %u worker%s named (addresses included); no image written",
+			 o->min_workers, f.n_w, f.n_w == 1 ? "" : "s");
+		rc = EXIT_TOO_FEW;
 		goto out;
 	}
-	if (f.tty) {
-		progress_init(&f.bar, f.tg.n, true);
+	/* before the workers start: one failing at once already asks join_check */
+	f.join_deadline = f.t0 + o->join_timeout_s;
+	ev_timer_init(&f.join, on_join, &f);
+	for (uint32_t i = 0; i < f.n_w; i++)
+		worker_start(&f.w[i]);
+	/* with --min-workers the local threads wait for the workers (join_check) */
+	if (!(o->min_workers && !o->no_local) && local_start(&f) < 0)
+		goto out;
+	if (o->min_workers)
+		join_check(&f);
+	enum progress_mode pm = progress_mode_for(o->quiet);
+	if (pm == PROGRESS_LINES && o->progress_interval == 0)
+		pm = PROGRESS_OFF;
+	progress_init(&f.bar, f.tg.n, pm, o->progress_interval, f.t0);
+	if (pm != PROGRESS_OFF) {
 		ev_timer_init(&f.progress, on_progress, &f);
-		ev_timer_arm(f.loop, &f.progress, net_now() + 0.25);
+		ev_timer_arm(f.loop, &f.progress, net_now() + FARM_PROGRESS_TICK_S);
 	}
 	farm_check_alive(&f); /* every worker may have failed at once */
 	if (f.rc == 0 && !atomic_load(cancel) && !sched_finished(f.s) && ev_run(f.loop) < 0)
 		fprintf(stderr, "portray-master: poll: %s\n", strerror(errno));
 	rc = f.rc;
 	sched_stop(f.s);
-	tile_pool_join(pool);
-	pool = NULL;
+	tile_pool_join(f.pool);
+	f.pool = NULL;
 	observe_changes(&f); /* the last tiles, and those finished while stopping */
 	farm_bye(&f);
-	if (f.tty)
-		progress_draw(&f);
 	summary(&f);
 	struct sched_stats st;
 	sched_stats(f.s, &st);
@@ -517,13 +622,14 @@ out:
 	interrupt_on_cancel(NULL, NULL);
 	if (f.loop)
 		stop_accepting(&f);
-	if (pool) {
+	if (f.pool) {
 		sched_stop(f.s);
-		tile_pool_join(pool);
+		tile_pool_join(f.pool);
 	}
 	for (uint32_t i = 0; f.w && i < f.n_w; i++)
 		worker_free(&f.w[i]);
 	free(f.w);
+	free(f.peers);
 	sched_free(f.s);
 	ev_free(f.loop);
 	free(f.secret);

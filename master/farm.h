@@ -14,7 +14,9 @@
 /*
  * Renders the encoded scene (scene_len bytes, proto_scene_encode) at w x h
  * into image (w*h*render_pixel_bytes(px) bytes, pixels of type px as
- * render.h states them, rows top to bottom) on the workers named in
+ * render.h states them, rows top to bottom; with o->region only the
+ * region's pixels are traced and written, the rest left as they were) on
+ * the workers named in
  * o (-w, --workers-file, --accept), with local threads (o->threads) joining
  * in unless o->no_local. With no workers named and no --accept it is the
  * local render: the same loop, scheduler and tile pool with the local
@@ -31,7 +33,8 @@
  * when *cancel becomes non-zero (unfinished tiles stay as they were in
  * image). Farm faults go to stderr always; progress and a summary unless
  * o->quiet. Returns 0 on success, ERRLEVEL_LEVEL2 when the local threads
- * found no memory for their tiles (what was done is in image), or an exit code (EXIT_NO_WORKERS when
+ * found no memory for their tiles (what was done is in image), or an exit code (EXIT_TOO_FEW when
+ * fewer than o->min_workers workers joined, EXIT_NO_WORKERS when
  * --no-local and every worker is lost, EXIT_USAGE for a bad worker list or
  * secret file) after printing a message on stderr.
  */

@@ -38,6 +38,10 @@
 #define FARM_BUILD_HB 10.0
 /* ... plus this many times the master's own build of the same scene */
 #define FARM_BUILD_LOCAL 20.0
+/* the progress timer's period: the bar redraws, lines fall due, rates update */
+#define FARM_PROGRESS_TICK_S 0.2
+/* --min-workers: how often the workers that joined are counted */
+#define FARM_JOIN_TICK_S 0.1
 /* local tile buffers refused in a row before the local threads give up */
 #define FARM_LOCAL_OOM_MAX 16
 
@@ -112,6 +116,7 @@ struct worker {
 	double rate_t0;
 	uint32_t rate_n0;
 	double rate;            /* tiles/s over the last second */
+	bool joined;            /* was ready to trace once (--min-workers) */
 };
 
 struct farm {
@@ -141,13 +146,24 @@ struct farm {
 	bool tty;
 	bool farmed;            /* workers named or --accept: else the local threads alone */
 	atomic_int local_gave_up; /* the local threads found no memory for tiles */
-	struct progress bar;    /* the bar of a render without workers */
+	struct progress bar;    /* progress on stderr (master/progress.h) */
+	struct progress_peer *peers; /* the farm part of its line, cap_w of them */
+	double local_t0, local_rate; /* the local threads' rate over the last second */
+	uint32_t local_n0;
 	double t0;
 	struct ev_timer progress;
 	uint32_t invalid_results;
 	struct farm_observer obs[FARM_OBSERVERS_MAX];
 	uint32_t n_obs;
 	int rc;                 /* the loop's verdict */
+	/* the local threads, started at once or (--min-workers) once enough workers joined */
+	const struct tile_source *src;
+	int n_threads;
+	struct tile_pool *pool;
+	struct ev_timer join;   /* --min-workers: checks the workers that joined */
+	double join_deadline;
+	bool joined_enough;
+	uint32_t n_joined;
 };
 
 /* farm.c */

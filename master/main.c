@@ -10,6 +10,7 @@
 #include "common/img.h"
 #include "common/tiles.h"
 #include "master/master.h"
+#include "master/sched.h"
 #include "proto/net.h"
 
 static void usage(FILE *f)
@@ -44,12 +45,24 @@ static void usage(FILE *f)
 		"                           in a handshake step or scene transfer (default 10)\n"
 		"      --audit F            re-render fraction F (0..1) of worker tiles here to check\n"
 		"                           them (default 0.03; 0: no audits; see docs/protocol.md)\n"
+		"      --progress-interval S  seconds between progress lines when stderr is not a\n"
+		"                           terminal (default 10; 0: none; on a terminal: a bar)\n"
+		"      --min-workers N      exit 75 unless N workers join (get ready to trace);\n"
+		"                           the local threads wait for them\n"
+		"      --join-timeout S     how long --min-workers waits for them (default 30)\n"
+		"      --region X0,Y0,X1,Y1 only the pixels X0..X1-1, Y0..Y1-1, into a cropped\n"
+		"                           image (the same bytes as a full render's)\n"
+		"      --preview            quick look: --no-aa --no-shadows --no-reflections\n"
+		"      --no-aa              one ray a pixel: the standard filter alone\n"
+		"      --no-shadows         no light casts shadows\n"
+		"      --no-reflections     no reflection rays\n"
 		"  -h, --help               show this help\n"
 		"  -V, --version            show the version\n"
 		"\n"
 		"Exit status: 0 success; 1 and 2 the PortRAY manual's error levels (Appendix B);\n"
 		"64 usage (an unknown output extension too); 69 no worker left with --no-local; 74 output\n"
-		"not written (a missing or read-only directory is found before rendering).\n",
+		"not written (a missing or read-only directory is found before rendering);\n"
+		"75 fewer workers joined than --min-workers.\n",
 		TILE_DEFAULT);
 }
 
@@ -65,7 +78,21 @@ static int parse_uint(const char *s, unsigned long max, unsigned long *out)
 }
 
 enum { OPT_CHECK = 256, OPT_TILE, OPT_SIZE, OPT_WFILE, OPT_SECRET, OPT_NOLOCAL, OPT_HB, OPT_AUDIT, OPT_ACCEPT,
-       OPT_PORTFILE, OPT_INSECURE, OPT_FORMAT, OPT_NO_RTIME, OPT_RTIME };
+       OPT_PORTFILE, OPT_INSECURE, OPT_FORMAT, OPT_NO_RTIME, OPT_RTIME,
+       /* issue 12: progress, --min-workers, preview switches */
+       OPT_PINTERVAL, OPT_MINW, OPT_JOINTO, OPT_REGION, OPT_PREVIEW, OPT_NOAA, OPT_NOSHADOWS, OPT_NOREFL };
+
+/* seconds in 0..max (zero_ok), or -1 */
+static int parse_seconds(const char *s, double max, bool zero_ok, double *out)
+{
+	char *end;
+	errno = 0;
+	double v = strtod(s, &end);
+	if (errno || end == s || *end || !(v >= 0 && v <= max) || (v == 0 && !zero_ok))
+		return -1;
+	*out = v;
+	return 0;
+}
 
 int main(int argc, char **argv)
 {
@@ -89,11 +116,20 @@ int main(int argc, char **argv)
 		{ "format", required_argument, NULL, OPT_FORMAT },
 		{ "no-render-time", no_argument, NULL, OPT_NO_RTIME },
 		{ "render-time", no_argument, NULL, OPT_RTIME },
+		{ "progress-interval", required_argument, NULL, OPT_PINTERVAL },
+		{ "min-workers", required_argument, NULL, OPT_MINW },
+		{ "join-timeout", required_argument, NULL, OPT_JOINTO },
+		{ "region", required_argument, NULL, OPT_REGION },
+		{ "preview", no_argument, NULL, OPT_PREVIEW },
+		{ "no-aa", no_argument, NULL, OPT_NOAA },
+		{ "no-shadows", no_argument, NULL, OPT_NOSHADOWS },
+		{ "no-reflections", no_argument, NULL, OPT_NOREFL },
 		{ "help", no_argument, NULL, 'h' },
 		{ "version", no_argument, NULL, 'V' },
 		{ NULL, 0, NULL, 0 },
 	};
-	struct master_opts o = { .no_render_time = true, .tile = 0 /* TILE_DEFAULT */, .heartbeat_s = 10.0, .audit = MASTER_AUDIT_DEFAULT };
+	struct master_opts o = { .no_render_time = true, .tile = 0 /* TILE_DEFAULT */, .heartbeat_s = 10.0, .audit = MASTER_AUDIT_DEFAULT,
+				  .progress_interval = -1, .join_timeout_s = MASTER_JOIN_TIMEOUT_DEFAULT };
 	unsigned long v;
 	int c;
 	while ((c = getopt_long(argc, argv, "c:o:j:qw:hV", longopts, NULL)) != -1) {
@@ -165,6 +201,43 @@ int main(int argc, char **argv)
 			}
 			break;
 		}
+		case OPT_PINTERVAL:
+			if (parse_seconds(optarg, 86400, true, &o.progress_interval) < 0) {
+				fprintf(stderr, "portray-master: --progress-interval wants seconds 0..86400, not '%s'\n", optarg);
+				return EXIT_USAGE;
+			}
+			break;
+		case OPT_MINW:
+			if (parse_uint(optarg, SCHED_MAX_WORKERS, &v) < 0) {
+				fprintf(stderr, "portray-master: --min-workers wants a number 0..%u, not '%s'\n",
+					SCHED_MAX_WORKERS, optarg);
+				return EXIT_USAGE;
+			}
+			o.min_workers = (uint32_t)v;
+			break;
+		case OPT_JOINTO:
+			if (parse_seconds(optarg, 86400, false, &o.join_timeout_s) < 0) {
+				fprintf(stderr, "portray-master: --join-timeout wants seconds (0..86400], not '%s'\n", optarg);
+				return EXIT_USAGE;
+			}
+			break;
+		case OPT_REGION: {
+			unsigned x0, y0, x1, y1;
+			char extra;
+			if (sscanf(optarg, "%u,%u,%u,%u%c", &x0, &y0, &x1, &y1, &extra) != 4 || optarg[0] == '-' ||
+			    strchr(optarg, '-') || x1 <= x0 || y1 <= y0) {
+				fprintf(stderr, "portray-master: --region wants X0,Y0,X1,Y1 with X0 < X1 and Y0 < Y1 "
+					"(pixels, X1 and Y1 excluded), not '%s'\n", optarg);
+				return EXIT_USAGE;
+			}
+			o.region = true;
+			o.rx0 = x0, o.ry0 = y0, o.rx1 = x1, o.ry1 = y1;
+			break;
+		}
+		case OPT_PREVIEW: o.no_aa = o.no_shadows = o.no_reflections = true; break;
+		case OPT_NOAA: o.no_aa = true; break;
+		case OPT_NOSHADOWS: o.no_shadows = true; break;
+		case OPT_NOREFL: o.no_reflections = true; break;
 		case 'h': usage(stdout); return 0;
 		case 'V': printf("portray-master %s (PortRAY 0.11 scene language)\n", PORTRAY_VERSION); return 0;
 		default: usage(stderr); return EXIT_USAGE;
@@ -176,6 +249,10 @@ int main(int argc, char **argv)
 		return EXIT_USAGE;
 	}
 	o.scene = argv[optind];
+	if (o.min_workers && !o.workers && !o.workers_file && !o.accept) {
+		fprintf(stderr, "portray-master: --min-workers wants workers: -w, --workers-file or --accept\n");
+		return EXIT_USAGE;
+	}
 	if (o.accept) {
 		/* refused at once, before any parsing or tracing */
 		char host[NET_HOST_LEN], port[NET_PORT_LEN], err[300];

@@ -12,12 +12,16 @@ enum {
 	EXIT_USAGE = 64,      /* bad command line (sysexits EX_USAGE) */
 	EXIT_IO = 74,         /* could not write the output image (EX_IOERR) */
 	EXIT_NO_WORKERS = 69, /* --no-local and every worker lost (EX_UNAVAILABLE) */
+	EXIT_TOO_FEW = 75,    /* --min-workers: fewer workers joined (EX_TEMPFAIL: try again later) */
 	EXIT_INTERRUPTED = 130 /* never used for a finished partial render */
 };
 
 /* default --audit: about 3 tiles in 100 re-rendered locally (plus each
  * worker's first few), a few percent of the farm's work */
 #define MASTER_AUDIT_DEFAULT 0.03
+/* default --join-timeout: a worker's connect retries, handshake, scene
+ * transfer and build fit with room to spare on a LAN */
+#define MASTER_JOIN_TIMEOUT_DEFAULT 30.0
 
 struct master_opts {
 	const char *camera;    /* -c FILE, may be NULL */
@@ -40,6 +44,16 @@ struct master_opts {
 	double heartbeat_s;    /* --heartbeat-timeout S (farm) */
 	double audit;          /* --audit F: fraction of worker tiles re-rendered here to check them (farm);
 				* 0 = no audits; main sets MASTER_AUDIT_DEFAULT */
+	/* issue 12: progress, --min-workers, preview switches */
+	double progress_interval; /* --progress-interval S: seconds between lines off a terminal;
+				   * 0 = none, < 0 = PROGRESS_LINES_DEFAULT_S */
+	uint32_t min_workers;  /* --min-workers N: fail (EXIT_TOO_FEW) unless N workers join; 0 = none */
+	double join_timeout_s; /* --join-timeout S: how long they may take (MASTER_JOIN_TIMEOUT_DEFAULT) */
+	bool region;           /* --region X0,Y0,X1,Y1: only these pixels, written as a cropped image */
+	uint32_t rx0, ry0, rx1, ry1; /* the region, x1 and y1 exclusive */
+	bool no_aa;            /* --no-aa (--preview): the standard filter alone */
+	bool no_shadows;       /* --no-shadows (--preview): no light casts shadows */
+	bool no_reflections;   /* --no-reflections (--preview): no reflection rays */
 };
 
 struct scene_camera;
@@ -49,6 +63,14 @@ void master_filter_warnings(const struct scene_camera *c);
 
 /* master/check.c: parse everything, print the summary, return the error level. */
 int master_check(const struct master_opts *o);
+/* master/preview.c: applies --no-aa, --no-shadows, --no-reflections to the
+ * parsed scene (before it is encoded for the wire: workers trace the same). */
+struct scene;
+void master_preview_apply(const struct master_opts *o, struct scene *s);
+/* master/preview.c: checks --region against the image size w x h; 0, or
+ * EXIT_USAGE after saying why. */
+int master_region_check(const struct master_opts *o, uint32_t w, uint32_t h);
+
 /* master/render.c: load, render (locally or on the farm), write; exit code. */
 int master_render(const struct master_opts *o);
 

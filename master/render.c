@@ -16,6 +16,7 @@
 #include "common/img.h"
 #include "common/parse.h"
 #include "common/render.h"
+#include "common/tiles.h"
 #include "master/farm.h"
 #include "master/interrupt.h"
 #include "master/master.h"
@@ -201,6 +202,7 @@ int master_render(const struct master_opts *o)
 		fprintf(stderr, "%s\n", err.msg);
 		goto done;
 	}
+	master_preview_apply(o, s); /* before the encoding: the workers trace the same */
 	master_filter_warnings(&s->camera);
 	double t_parse = progress_now();
 
@@ -239,6 +241,9 @@ int master_render(const struct master_opts *o)
 	}
 	uint32_t w, h;
 	renderer_size(r, &w, &h);
+	rc = master_region_check(o, w, h);
+	if (rc)
+		goto done;
 	double t_build = progress_now();
 
 	enum render_pixel px = pixel_for(fmt);
@@ -253,7 +258,12 @@ int master_render(const struct master_opts *o)
 	atomic_init(&cancel, 0);
 	interrupt_start(&cancel, !ds->image.nonstop);
 	watching = true;
-	uint64_t total = render_tile_count(w, h, o->tile);
+	struct tiling tg; /* as farm_render cuts it */
+	if (o->region)
+		tiling_init_region(&tg, w, h, o->tile, o->rx0, o->ry0, o->rx1, o->ry1);
+	else
+		tiling_init(&tg, w, h, o->tile);
+	uint64_t total = tg.n;
 	uint32_t finished = 0;
 	int threads = o->threads > 0 ? o->threads : render_ncpus();
 	bool farm = o->workers || o->workers_file || o->accept;
@@ -278,6 +288,16 @@ int master_render(const struct master_opts *o)
 		floats_to_host(image, (size_t)w * h * 3);
 	struct img_desc desc = { .w = w, .h = h, .type = px == RENDER_RGBF32 ? IMG_RGBF32 : IMG_RGB8,
 				 .pixels = image, .format = fmt, .text = texts };
+	if (o->region) {
+		/* a cropped file: the region's rows moved to the front, in place */
+		size_t bpp = render_pixel_bytes(px);
+		uint32_t rw = o->rx1 - o->rx0, rh = o->ry1 - o->ry0;
+		for (uint32_t y = 0; y < rh; y++)
+			memmove(image + (size_t)y * rw * bpp, image + ((size_t)(o->ry0 + y) * w + o->rx0) * bpp,
+				(size_t)rw * bpp);
+		desc.w = rw;
+		desc.h = rh;
+	}
 	desc.n_text = output_texts(o, t_render - t0, partial ? partial_why : NULL, texts, bufs);
 	if (img_write_opts(out, &desc) < 0) {
 		fprintf(stderr, "portray-master: cannot write %s: %s\n", shown(out), strerror(errno));
@@ -299,10 +319,16 @@ int master_render(const struct master_opts *o)
 	} else if (!o->quiet && !farm) {
 		double tr = t_render - t_build;
 		uint64_t rays = renderer_rays(r);
+		char size[96];
+		if (o->region)
+			snprintf(size, sizeof size, "%ux%u (region %u,%u,%u,%u of %ux%u)", desc.w, desc.h, o->rx0, o->ry0,
+				 o->rx1, o->ry1, w, h);
+		else
+			snprintf(size, sizeof size, "%ux%u", w, h);
 		fprintf(stderr,
-			"portray-master: %s: %ux%u, %d thread%s, %llu tiles, %.3f s (parse %.3f, build %.3f, "
+			"portray-master: %s: %s, %d thread%s, %llu tiles, %.3f s (parse %.3f, build %.3f, "
 			"trace %.3f), %llu eye rays, %.2f Mrays/s\n",
-			shown(out), w, h, threads, threads == 1 ? "" : "s", (unsigned long long)total,
+			shown(out), size, threads, threads == 1 ? "" : "s", (unsigned long long)total,
 			t_render - t0, t_parse - t0, t_build - t_parse, tr, (unsigned long long)rays,
 			tr > 0 ? rays / tr * 1e-6 : 0.0);
 	}
