@@ -19,6 +19,7 @@
 
 #include "common/cancel.h"
 #include "common/rng.h"
+#include "common/xmath.h"
 
 /* Purpose tag for the filters' own random numbers (the layer index is added),
  * so they never coincide with the streams shading derives from the seed. */
@@ -195,7 +196,7 @@ static vec3 expand(struct walk *w, int layer, struct sample smp)
 			uint64_t rs = rng_derive(seed_of(w->sx, w->sy, c.s), FILTER_RNG_TAG + (uint64_t)layer);
 			double u1 = rng_uniform(rs, 0), u2 = rng_uniform(rs, 1);
 			double rr = f->radius * sqrt(u1), phi = 2.0 * M_PI * u2;
-			double du = rr * cos(phi), dv = rr * sin(phi);
+			double du = rr * xm_cos(phi), dv = rr * xm_sin(phi);
 			if (f->kind == FILTER_DISK) {
 				c.px += du;
 				c.py += dv;
