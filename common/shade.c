@@ -142,14 +142,16 @@ static vec3 light_point(const struct shade_light *L, int k, int n, double r1, do
 	double u2 = frac(k * GOLDEN_FRAC + r2);
 	switch (l->shape) {
 	case LIGHT_SPHERE: {
-		double z = 1 - 2 * u1, rho = sqrt(fmax(0, 1 - z * z)), phi = 2 * M_PI * u2;
-		vec3 d = v3(rho * xm_cos(phi), rho * xm_sin(phi), z);
+		double z = 1 - 2 * u1, rho = sqrt(fmax(0, 1 - z * z)), phi = 2 * M_PI * u2, sn, cs;
+		xm_sincos(phi, &sn, &cs);
+		vec3 d = v3(rho * cs, rho * sn, z);
 		return v3_add(l->sphere.centre, v3_scale(d, l->sphere.radius));
 	}
 	case LIGHT_CYLINDER: {
-		double phi = 2 * M_PI * u2, r = l->cylinder.radius;
+		double phi = 2 * M_PI * u2, r = l->cylinder.radius, sn, cs;
+		xm_sincos(phi, &sn, &cs);
 		vec3 axis = v3_sub(l->cylinder.to, l->cylinder.from);
-		vec3 rad = v3_add(v3_scale(L->e1, xm_cos(phi)), v3_scale(L->e2, xm_sin(phi)));
+		vec3 rad = v3_add(v3_scale(L->e1, cs), v3_scale(L->e2, sn));
 		if (l->cylinder.capped) { /* u1 picks side or a cap by area */
 			double side = 2 * M_PI * r * v3_len(axis), cap = M_PI * r * r;
 			double t = u1 * (side + 2 * cap);

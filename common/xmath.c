@@ -40,8 +40,12 @@
 static const double sin_c[7] = { -0x1.5555555555555p-3, 0x1.1111111111110p-7, -0x1.a01a01a019938p-13, 0x1.71de3a546095bp-19, -0x1.ae645412c560cp-26, 0x1.61217f0b800d5p-33, -0x1.ab17d404de5b3p-41 };
 /* cos_c: 7 coefficients, max relative error of the fit 2^-59.5 */
 static const double cos_c[7] = { 0x1.5555555555555p-5, -0x1.6c16c16c16c16p-10, 0x1.a01a01a019d0ap-16, -0x1.27e4fb7712d65p-22, 0x1.1eed8deb97a97p-29, -0x1.9394ba0cd6ed5p-37, 0x1.ab785b00b4646p-45 };
-/* atan_c: 6 coefficients, max relative error of the fit 2^-63.6 */
-static const double atan_c[6] = { -0x1.5555555555555p-2, 0x1.999999999994ep-3, -0x1.249249245ad84p-3, 0x1.c71c6fedc5733p-4, -0x1.745985823fac1p-4, 0x1.37e5c2335d231p-4 };
+/* atan_c: 6 coefficients, max relative error of the fit 2^-64.0 */
+static const double atan_c[6] = { -0x1.5555555555555p-2, 0x1.9999999999986p-3, -0x1.249249247f30ep-3, 0x1.c71c70f2345bap-4, -0x1.745afe91c1d6ap-4, 0x1.38a3954748032p-4 };
+/* atan_s: 3 coefficients, max relative error of the fit 2^-64.2 */
+static const double atan_s[3] = { -0x1.5555555555547p-2, 0x1.9999999199bf7p-3, -0x1.248cf3e2df98ep-3 };
+/* asin_c: 13 coefficients, max relative error of the fit 2^-57.4 */
+static const double asin_c[13] = { 0x1.5555555555556p-3, 0x1.3333333332ecap-4, 0x1.6db6db6e31f13p-5, 0x1.f1c71c1db0623p-6, 0x1.6e8bb1c8209a2p-6, 0x1.1c4d35cf95421p-6, 0x1.c9cf07674736ap-7, 0x1.782651caa6547p-7, 0x1.52420b04b37bep-7, 0x1.65a9c4dfcf8b2p-8, 0x1.1d189408314eep-6, -0x1.e6aaa8a0a04ccp-7, 0x1.d72b2bc8155f8p-6 };
 /* exp_c: 6 coefficients, max relative error of the fit 2^-71.6 */
 static const double exp_c[6] = { 0x1.5555555555555p-3, 0x1.5555555555555p-5, 0x1.1111111110df1p-7, 0x1.6c16c16c16997p-10, 0x1.a01a129ebaa14p-13, 0x1.a01a0f389a75bp-16 };
 /* log1p_c: 6 coefficients, max relative error of the fit 2^-67.8 */
@@ -208,41 +212,99 @@ static const double log_tab[92][2] = {
 	{ 0x1.5d1bdbf5809cap-2, 0x1.4236383dc7fe1p-56 },
 	{ 0x1.62c82f2b9c795p-2, 0x1.7b7af915300e5p-57 },
 };
-/* atan(i/8), i = 0..32, as hi + lo */
-static const double atan_tab[33][2] = {
+/* atan(i/64), i = 0..64, as hi + lo */
+static const double atan_tab[65][2] = {
 	{ 0x0.0p+0, 0x0.0p+0 },
+	{ 0x1.fff555bbb729bp-7, -0x1.220c39d4dff50p-61 },
+	{ 0x1.ffd55bba97625p-6, -0x1.5ec431444912cp-60 },
+	{ 0x1.7fb818430da2ap-5, -0x1.86ef8f794f105p-63 },
+	{ 0x1.ff55bb72cfdeap-5, -0x1.c934d86d23f1dp-60 },
+	{ 0x1.3f59f0e7c559dp-4, 0x1.ac4ce285df847p-58 },
+	{ 0x1.7ee182602f10fp-4, -0x1.cfb654c0c3d98p-58 },
+	{ 0x1.be39ebe6f07c3p-4, 0x1.f7b8f29a05987p-58 },
 	{ 0x1.fd5ba9aac2f6ep-4, -0x1.cd37686760c17p-59 },
+	{ 0x1.1e1fafb043727p-3, -0x1.b485914dacf8cp-59 },
+	{ 0x1.3d6eee8c6626cp-3, 0x1.61a3b0ce9281bp-57 },
+	{ 0x1.5c9811e3ec26ap-3, -0x1.054ab2c010f3dp-58 },
+	{ 0x1.7b97b4bce5b02p-3, 0x1.347b0b4f881cap-58 },
+	{ 0x1.9a6a8e96c8626p-3, 0x1.cf601e7b4348ep-59 },
+	{ 0x1.b90d7529260a2p-3, 0x1.17b10d2e0e5abp-61 },
+	{ 0x1.d77d5df205736p-3, 0x1.c648d1534597ep-57 },
 	{ 0x1.f5b75f92c80ddp-3, 0x1.8ab6e3cf7afbdp-57 },
+	{ 0x1.09dc597d86362p-2, 0x1.62e47390cb865p-56 },
+	{ 0x1.18bf5a30bf178p-2, 0x1.30ca4748b1bf9p-57 },
+	{ 0x1.278372057ef46p-2, -0x1.077cdd36dfc81p-56 },
+	{ 0x1.362773707ebccp-2, -0x1.963a544b672d8p-57 },
+	{ 0x1.44aa436c2af0ap-2, -0x1.5d5e43c55b3bap-56 },
+	{ 0x1.530ad9951cd4ap-2, -0x1.2566480884082p-57 },
+	{ 0x1.614840309cfe2p-2, -0x1.a725715711f00p-56 },
 	{ 0x1.6f61941e4def1p-2, -0x1.c63aae6f6e918p-56 },
+	{ 0x1.7d5604b63b3f7p-2, 0x1.69c885c2b249ap-56 },
+	{ 0x1.8b24d394a1b25p-2, 0x1.b6d0ba3748fa8p-56 },
+	{ 0x1.98cd5454d6b18p-2, 0x1.9e6c988fd0a77p-56 },
+	{ 0x1.a64eec3cc23fdp-2, -0x1.24dec1b50b7ffp-56 },
+	{ 0x1.b3a911da65c6cp-2, 0x1.ae187b1ca5040p-56 },
+	{ 0x1.c0db4c94ec9f0p-2, -0x1.cc1ce70934c34p-56 },
+	{ 0x1.cde53432c1351p-2, -0x1.a2cfa4418f1adp-56 },
 	{ 0x1.dac670561bb4fp-2, 0x1.a2b7f222f65e2p-56 },
+	{ 0x1.e77eb7f175a34p-2, 0x1.0e53dc1bf3435p-56 },
+	{ 0x1.f40dd0b541418p-2, -0x1.a3992dc382a23p-57 },
+	{ 0x1.0039c73c1a40cp-1, -0x1.b32c949c9d593p-55 },
+	{ 0x1.0657e94db30d0p-1, -0x1.d5b495f6349e6p-56 },
+	{ 0x1.0c6145b5b43dap-1, 0x1.974fa13b5404fp-58 },
+	{ 0x1.1255d9bfbd2a9p-1, -0x1.2bdaee1c0ee35p-58 },
+	{ 0x1.1835a88be7c13p-1, 0x1.c621cec00c301p-55 },
 	{ 0x1.1e00babdefeb4p-1, -0x1.928df287a668fp-58 },
+	{ 0x1.23b71e2cc9e6ap-1, 0x1.c421c9f38224ep-57 },
+	{ 0x1.2958e59308e31p-1, -0x1.09e73b0c6c087p-56 },
+	{ 0x1.2ee628406cbcap-1, 0x1.c5d5e9ff0cf8dp-55 },
+	{ 0x1.345f01cce37bbp-1, 0x1.1021137c71102p-55 },
+	{ 0x1.39c391cd4171ap-1, -0x1.2304331d8bf46p-55 },
+	{ 0x1.3f13fb89e96f4p-1, 0x1.ecf8b492644f0p-56 },
+	{ 0x1.445065b795b56p-1, -0x1.f76d0163f79c8p-56 },
 	{ 0x1.4978fa3269ee1p-1, 0x1.2419a87f2a458p-56 },
+	{ 0x1.4e8de5bb6ec04p-1, 0x1.4a33dbeb3796cp-55 },
+	{ 0x1.538f57b89061fp-1, -0x1.1bb74abda520cp-55 },
+	{ 0x1.587d81f732fbbp-1, -0x1.5e5c9d8c5a950p-56 },
+	{ 0x1.5d58987169b18p-1, 0x1.0028e4bc5e7cap-57 },
+	{ 0x1.6220d115d7b8ep-1, -0x1.2b785350ee8c1p-57 },
+	{ 0x1.66d663923e087p-1, -0x1.6ea6febe8bbbap-56 },
+	{ 0x1.6b798920b3d99p-1, -0x1.a80386188c50ep-55 },
 	{ 0x1.700a7c5784634p-1, -0x1.8c34d25aadef6p-56 },
+	{ 0x1.748978fba8e0fp-1, 0x1.7b2a6165884a1p-59 },
+	{ 0x1.78f6bbd5d315ep-1, 0x1.406a089803740p-55 },
+	{ 0x1.7d528289fa093p-1, 0x1.560821e2f3aa9p-55 },
+	{ 0x1.819d0b7158a4dp-1, -0x1.bf76229d3b917p-56 },
+	{ 0x1.85d69576cc2c5p-1, 0x1.6b66e7fc8b8c3p-57 },
+	{ 0x1.89ff5ff57f1f8p-1, -0x1.55b9a5e177a1bp-55 },
+	{ 0x1.8e17aa99cc05ep-1, -0x1.ec182ab042f61p-56 },
 	{ 0x1.921fb54442d18p-1, 0x1.1a62633145c07p-55 },
-	{ 0x1.b034f38649c88p-1, -0x1.be88d6936f833p-55 },
-	{ 0x1.cac7c57846f9ep-1, 0x1.0dae13ad18a6bp-55 },
-	{ 0x1.e24dd44c855d1p-1, 0x1.f7ac612ab33d8p-55 },
-	{ 0x1.f730bd281f69bp-1, 0x1.007887af0cbbdp-56 },
-	{ 0x1.04e67277a01d7p+0, 0x1.7115496c13eb6p-57 },
-	{ 0x1.0d38f2c5ba09fp+0, -0x1.bd0dc231bfd70p-54 },
-	{ 0x1.14b1dd5f90ce1p+0, -0x1.212d570a63fa2p-56 },
-	{ 0x1.1b6e192ebbe44p+0, 0x1.b1b466a88828ep-54 },
-	{ 0x1.21862f3fade36p+0, 0x1.4887628d68748p-54 },
-	{ 0x1.270ef55a53a25p+0, -0x1.a66b1af5f84fbp-54 },
-	{ 0x1.2c1a241d66dc3p+0, 0x1.82b2d58b6a8e9p-54 },
-	{ 0x1.30b6d796a4da8p+0, 0x1.6254cb03bb199p-54 },
-	{ 0x1.34f1fbb19eb09p+0, 0x1.80d79b4cf61d5p-55 },
-	{ 0x1.38d6a6ce13353p+0, -0x1.12c77e8a80f5cp-55 },
-	{ 0x1.3c6e650b38047p+0, 0x1.6b63b358e746dp-54 },
-	{ 0x1.3fc176b7a8560p+0, -0x1.441a3bd3f1083p-59 },
-	{ 0x1.42d70411f9ec1p+0, 0x1.2b08db7f10896p-55 },
-	{ 0x1.45b54837351a0p+0, 0x1.9e4a72eedacc4p-56 },
-	{ 0x1.4861b4cfbe710p+0, -0x1.567d3d25932d1p-57 },
-	{ 0x1.4ae10fc6589a5p+0, -0x1.3b03e8a27f555p-54 },
-	{ 0x1.4d378c1999a0dp+0, -0x1.c857a639541c8p-57 },
-	{ 0x1.4f68dea672617p+0, 0x1.934f9f2b0020ep-54 },
-	{ 0x1.51784fa1544bap+0, -0x1.236e3c857c019p-54 },
-	{ 0x1.5368c951e9cfdp+0, -0x1.96f47948a99f1p-54 },
+};
+/* 128/j, j = 90..181, rounded (log's reciprocals: only the rounding's size matters) */
+static const double inv_tab[92] = {
+	0x1.6c16c16c16c17p+0, 0x1.6816816816817p+0, 0x1.642c8590b2164p+0, 0x1.6058160581606p+0,
+	0x1.5c9882b931057p+0, 0x1.58ed2308158edp+0, 0x1.5555555555555p+0, 0x1.51d07eae2f815p+0,
+	0x1.4e5e0a72f0539p+0, 0x1.4afd6a052bf5bp+0, 0x1.47ae147ae147bp+0, 0x1.446f86562d9fbp+0,
+	0x1.4141414141414p+0, 0x1.3e22cbce4a902p+0, 0x1.3b13b13b13b14p+0, 0x1.3813813813814p+0,
+	0x1.3521cfb2b78c1p+0, 0x1.323e34a2b10bfp+0, 0x1.2f684bda12f68p+0, 0x1.2c9fb4d812ca0p+0,
+	0x1.29e4129e4129ep+0, 0x1.27350b8812735p+0, 0x1.2492492492492p+0, 0x1.21fb78121fb78p+0,
+	0x1.1f7047dc11f70p+0, 0x1.1cf06ada2811dp+0, 0x1.1a7b9611a7b96p+0, 0x1.1811811811812p+0,
+	0x1.15b1e5f75270dp+0, 0x1.135c81135c811p+0, 0x1.1111111111111p+0, 0x1.0ecf56be69c90p+0,
+	0x1.0c9714fbcda3bp+0, 0x1.0a6810a6810a7p+0, 0x1.0842108421084p+0, 0x1.0624dd2f1a9fcp+0,
+	0x1.0410410410410p+0, 0x1.0204081020408p+0, 0x1.0000000000000p+0, 0x1.fc07f01fc07f0p-1,
+	0x1.f81f81f81f820p-1, 0x1.f44659e4a4271p-1, 0x1.f07c1f07c1f08p-1, 0x1.ecc07b301ecc0p-1,
+	0x1.e9131abf0b767p-1, 0x1.e573ac901e574p-1, 0x1.e1e1e1e1e1e1ep-1, 0x1.de5d6e3f8868ap-1,
+	0x1.dae6076b981dbp-1, 0x1.d77b654b82c34p-1, 0x1.d41d41d41d41dp-1, 0x1.d0cb58f6ec074p-1,
+	0x1.cd85689039b0bp-1, 0x1.ca4b3055ee191p-1, 0x1.c71c71c71c71cp-1, 0x1.c3f8f01c3f8f0p-1,
+	0x1.c0e070381c0e0p-1, 0x1.bdd2b899406f7p-1, 0x1.bacf914c1bad0p-1, 0x1.b7d6c3dda338bp-1,
+	0x1.b4e81b4e81b4fp-1, 0x1.b2036406c80d9p-1, 0x1.af286bca1af28p-1, 0x1.ac5701ac5701bp-1,
+	0x1.a98ef606a63bep-1, 0x1.a6d01a6d01a6dp-1, 0x1.a41a41a41a41ap-1, 0x1.a16d3f97a4b02p-1,
+	0x1.9ec8e951033d9p-1, 0x1.9c2d14ee4a102p-1, 0x1.999999999999ap-1, 0x1.970e4f80cb872p-1,
+	0x1.948b0fcd6e9e0p-1, 0x1.920fb49d0e229p-1, 0x1.8f9c18f9c18fap-1, 0x1.8d3018d3018d3p-1,
+	0x1.8acb90f6bf3aap-1, 0x1.886e5f0abb04ap-1, 0x1.8618618618618p-1, 0x1.83c977ab2beddp-1,
+	0x1.8181818181818p-1, 0x1.7f405fd017f40p-1, 0x1.7d05f417d05f4p-1, 0x1.7ad2208e0ecc3p-1,
+	0x1.78a4c8178a4c8p-1, 0x1.767dce434a9b1p-1, 0x1.745d1745d1746p-1, 0x1.724287f46debcp-1,
+	0x1.702e05c0b8170p-1, 0x1.6e1f76b4337c7p-1, 0x1.6c16c16c16c17p-1, 0x1.6a13cd1537290p-1,
 };
 /* 2/pi in 32-bit words: word i holds the bits of weight 2^-(32i+1) .. 2^-(32i+32) */
 static const uint32_t two_over_pi[44] = {
@@ -317,6 +379,25 @@ static inline void two_prod(double a, double b, double *p, double *e)
 	vsplit(b, &bh, &bl);
 	*p = a * b;
 	*e = ((ah * bh - *p) + ah * bl + al * bh) + al * bl;
+}
+
+/* two_prod when b has at most 26 significant bits (a table constant, i/8):
+ * only a is split */
+static inline void two_prod_short(double a, double b, double *p, double *e)
+{
+	double ah, al;
+	vsplit(a, &ah, &al);
+	*p = a * b;
+	*e = (ah * b - *p) + al * b;
+}
+
+/* p + e = a * a exactly */
+static inline void two_sqr(double a, double *p, double *e)
+{
+	double ah, al;
+	vsplit(a, &ah, &al);
+	*p = a * a;
+	*e = ((ah * ah - *p) + 2 * ah * al) + al * al;
 }
 
 /* round to the nearest integer, |x| < 2^51 */
@@ -457,7 +538,7 @@ static double ksin(double x, double y)
 static double kcos(double x, double y)
 {
 	double z, ze;
-	two_prod(x, x, &z, &ze);
+	two_sqr(x, &z, &ze);
 	double hz = 0.5 * z, w = 1.0 - hz;
 	double c = (1.0 - w) - hz; /* exact (Fast2Sum) */
 	return w + (c + ((z * z * poly(cos_c, 7, z) - 0.5 * ze) - x * y));
@@ -537,34 +618,6 @@ double xm_tan(double x)
 
 /* ---- atan, atan2, asin, acos ---- */
 
-/* atan(x) as a double-double *rh + *rl, x = xh + xl, 0 <= xh <= 4.0625,
- * |xl| <= ulp(xh) */
-static void atan_core(double xh, double xl, double *rh, double *rl)
-{
-	if (xh < 0.0625) {
-		double z = xh * xh;
-		double p = xh * z * poly(atan_c, 6, z) + (xl - xl * z);
-		fast_two_sum(xh, p, rh, rl);
-		return;
-	}
-	int i = (int)(xh * 8 + 0.5); /* 1 .. 32 */
-	double c = i * 0.125;
-	double nh = xh - c; /* exact: Sterbenz, c/2 <= xh <= 2c */
-	double ph, pl, dh, dl;
-	two_prod(xh, c, &ph, &pl);
-	two_sum(1.0, ph, &dh, &dl);
-	dl += pl + xl * c;
-	/* t = (nh + xl) / (dh + dl) as th + tl */
-	double th = nh / dh, q, qe;
-	two_prod(th, dh, &q, &qe);
-	double tl = (((nh - q) - qe) + xl - th * dl) / dh;
-	double z = th * th;
-	double p = th * z * poly(atan_c, 6, z) + (tl - tl * z);
-	double sh, se;
-	two_sum(atan_tab[i][0], th, &sh, &se);
-	fast_two_sum(sh, se + (atan_tab[i][1] + p), rh, rl);
-}
-
 /* *rh + *rl = c - (ah + al) for the constant c = chi + clo */
 static inline void dd_sub_from(double chi, double clo, double ah, double al, double *rh, double *rl)
 {
@@ -573,17 +626,34 @@ static inline void dd_sub_from(double chi, double clo, double ah, double al, dou
 	fast_two_sum(s, e + (clo - al), rh, rl);
 }
 
-/* atan(n / d) as a double-double, n = nh + nl, d = dh + dl, 0 <= n <= d,
- * 2^-300 <= d <= 2^300 (n may be 0) */
-static void atan_ratio(double nh, double nl, double dh, double dl, double *rh, double *rl)
+/*
+ * atan(n / d) as a double-double *rh + *rl, for 0 <= n <= d, n and d
+ * doubles with 2^-300 <= d <= 2^300 (n may be 0 or tiny). Below 3.5/64 the
+ * quotient t = n/d itself, with its remainder (exact), goes into the
+ * polynomial. Above, with c = i/64 nearest n/d: atan(n/d) = atan(c) +
+ * atan(t), t = (n - c d) / (d + c n), |t| <= 1/128; n - c d is exact (c d
+ * as a double-double, then Sterbenz) and t's two roundings (the
+ * denominator's and the quotient's) cost at most 2^-59, a quarter of an ulp
+ * of a result >= atan(3.5/64).
+ */
+static void atan_ratio(double n, double d, double *rh, double *rl)
 {
-	double zh = nh / dh, zl = 0;
-	if (zh >= 0x1p-500) {
-		double q, qe;
-		two_prod(zh, dh, &q, &qe);
-		zl = (((nh - q) - qe) + nl - zh * dl) / dh;
+	double z0 = n / d;
+	int i = (int)(z0 * 64 + 0.5); /* 0 .. 64 */
+	if (i < 4) {
+		double u, ue;
+		two_prod(z0, d, &u, &ue);
+		double tl = ((n - u) - ue) / d, z = z0 * z0;
+		fast_two_sum(z0, z0 * z * poly(atan_c, 6, z) + (tl - tl * z), rh, rl);
+		return;
 	}
-	atan_core(zh, zl, rh, rl);
+	double c = i * 0x1p-6, p, pe;
+	two_prod_short(d, c, &p, &pe);
+	double D = d + c * n;
+	double th = (n - p) / D, tl = -pe / D; /* n - p exact */
+	double z = th * th;
+	double lo = th * z * poly(atan_s, 3, z) + tl;
+	fast_two_sum(atan_tab[i][0], th + (atan_tab[i][1] + lo), rh, rl);
 }
 
 double xm_atan(double x)
@@ -593,13 +663,10 @@ double xm_atan(double x)
 		return a != a ? x + x : x > 0 ? PIO2_HI + PIO2_LO : -PIO2_HI - PIO2_LO;
 	if (a < 0x1p-27)
 		return x;
-	if (a <= 4.0625) {
-		atan_core(a, 0, &rh, &rl);
+	if (a <= 1) {
+		atan_ratio(a, 1, &rh, &rl);
 	} else {
-		double yh = 1 / a, q, qe;
-		two_prod(yh, a, &q, &qe);
-		double yl = ((1 - q) - qe) / a;
-		atan_core(yh, yl, &rh, &rl);
+		atan_ratio(1, a, &rh, &rl);
 		dd_sub_from(PIO2_HI, PIO2_LO, rh, rl, &rh, &rl);
 	}
 	return x < 0 ? -rh : rh;
@@ -607,9 +674,11 @@ double xm_atan(double x)
 
 double xm_atan2(double y, double x)
 {
+	double ay = fabs(y), ax = fabs(x), rh, rl;
+	if (ay > 0 && ax > 0 && ay < INFINITY && ax < INFINITY)
+		goto finite;
 	if (x != x || y != y)
 		return x + y;
-	double ay = fabs(y), ax = fabs(x), rh, rl;
 	if (ay == 0) /* atan2(+-0, x): +-0 for x > 0 or +0, +-pi for x < 0 or -0 */
 		return signbit(x) ? copysign(PI_HI + PI_LO, y) : y;
 	if (ax == 0)
@@ -624,17 +693,17 @@ double xm_atan2(double y, double x)
 			r = x > 0 ? 0 : PI_HI + PI_LO;
 		return copysign(r, y);
 	}
+finite:;
 	int swap = ay > ax;
 	double n = swap ? ax : ay, d = swap ? ay : ax;
-	/* scale by a power of two (the quotient is unchanged) into atan_ratio's range;
-	 * a numerator driven into the subnormals only meets the quotient < 2^-500 case */
-	double sc = d > 0x1p300 ? 0x1p-600 : d < 0x1p-300 ? 0x1p600 : 1;
-	double zh = n / d;
-	if (zh < 0x1p-500) {
-		rh = zh; /* atan(z) = z to the last bit; z rounded once */
+	if (n < d * 0x1p-60) {
+		/* atan(z) = z to the last bit: z rounded once (it may be subnormal) */
+		rh = n / d;
 		rl = 0;
 	} else {
-		atan_ratio(n * sc, 0, d * sc, 0, &rh, &rl);
+		/* a power of two brings d into atan_ratio's range; the quotient is unchanged */
+		double sc = d > 0x1p300 ? 0x1p-600 : d < 0x1p-300 ? 0x1p600 : 1;
+		atan_ratio(n * sc, d * sc, &rh, &rl);
 	}
 	if (swap)
 		dd_sub_from(PIO2_HI, PIO2_LO, rh, rl, &rh, &rl);
@@ -643,56 +712,66 @@ double xm_atan2(double y, double x)
 	return y < 0 ? -rh : rh;
 }
 
-/* sqrt(1 - a^2) as a double-double, 0 <= a <= 1 */
-static void sqrt_1m2(double a, double *sh, double *sl)
+/*
+ * asin(s + sl) - (s + sl) for 0 <= s <= 1/2 (z = s^2, near enough): the
+ * odd polynomial's tail s^3 P(z) plus the first-order effect of sl
+ */
+static inline double asin_tail(double s, double sl, double z)
 {
-	double p, pe, d, de, dh, dl;
-	two_prod(a, a, &p, &pe);
-	two_sum(1.0, -p, &d, &de);
-	fast_two_sum(d, de - pe, &dh, &dl);
-	double s = sqrt(dh), q, qe;
-	if (s == 0) {
-		*sh = *sl = 0;
-		return;
-	}
-	two_prod(s, s, &q, &qe);
-	*sh = s;
-	*sl = (((dh - q) - qe) + dl) / (2 * s);
+	return s * z * poly(asin_c, 13, z) + sl;
+}
+
+/* For 1/2 < a <= 1: s + sl = sqrt((1 - a) / 2) and z = (1 - a) / 2, with
+ * asin(a) = pi/2 - 2 asin(s) and acos(a) = 2 asin(s) */
+static inline void half_angle(double a, double *s, double *sl, double *z)
+{
+	double zz = (1 - a) * 0.5; /* exact: Sterbenz, then a power of two */
+	double r = sqrt(zz), q, qe;
+	two_sqr(r, &q, &qe);
+	*s = r;
+	*sl = r > 0 ? ((zz - q) - qe) / (2 * r) : 0;
+	*z = zz;
 }
 
 double xm_asin(double x)
 {
-	double a = fabs(x), sh, sl, rh, rl;
+	double a = fabs(x), rh, rl;
 	if (!(a <= 1))
 		return (x - x) / (x - x); /* NaN, also for NaN */
 	if (a < 0x1p-26)
 		return x;
-	sqrt_1m2(a, &sh, &sl);
-	if (a <= sh) {
-		atan_ratio(a, 0, sh, sl, &rh, &rl);
+	if (a <= 0.5) {
+		double z = a * a;
+		rh = a + a * z * poly(asin_c, 13, z);
 	} else {
-		atan_ratio(sh, sl, a, 0, &rh, &rl);
-		dd_sub_from(PIO2_HI, PIO2_LO, rh, rl, &rh, &rl);
+		double s, sl, z;
+		half_angle(a, &s, &sl, &z);
+		double t = asin_tail(s, sl, z);
+		dd_sub_from(PIO2_HI, PIO2_LO, 2 * s, 2 * t, &rh, &rl);
 	}
 	return x < 0 ? -rh : rh;
 }
 
 double xm_acos(double x)
 {
-	double a = fabs(x), sh, sl, rh, rl;
+	double a = fabs(x), rh, rl;
 	if (!(a <= 1))
 		return (x - x) / (x - x);
 	if (a < 0x1p-60)
 		return PIO2_HI + PIO2_LO;
-	sqrt_1m2(a, &sh, &sl);
-	if (sh <= a) { /* the angle from the x axis: atan(s / |x|) */
-		atan_ratio(sh, sl, a, 0, &rh, &rl);
-	} else {
-		atan_ratio(a, 0, sh, sl, &rh, &rl);
-		dd_sub_from(PIO2_HI, PIO2_LO, rh, rl, &rh, &rl);
+	if (a <= 0.5) { /* pi/2 - asin(x) */
+		double z = a * a, t = a * z * poly(asin_c, 13, z);
+		if (x < 0)
+			a = -a, t = -t;
+		dd_sub_from(PIO2_HI, PIO2_LO, a, t, &rh, &rl);
+		return rh;
 	}
-	if (x < 0)
-		dd_sub_from(PI_HI, PI_LO, rh, rl, &rh, &rl);
+	double s, sl, z;
+	half_angle(a, &s, &sl, &z);
+	double t = asin_tail(s, sl, z);
+	if (x > 0)
+		return 2 * s + 2 * t; /* 2 asin(s) */
+	dd_sub_from(PI_HI, PI_LO, 2 * s, 2 * t, &rh, &rl); /* pi - 2 asin(s) */
 	return rh;
 }
 
@@ -747,19 +826,22 @@ static void log_core(double x, double *rh, double *rl)
 		k++;
 	}
 	int j = (int)(m * 128 + 0.5);
-	double F = j * 0x1p-7, f = m - F; /* exact */
-	double qh = f / F, a, ae;
-	two_prod(qh, F, &a, &ae);
-	double ql = ((f - a) - ae) / F;
+	double F = j * 0x1p-7, f = m - F, inv = inv_tab[j - 90]; /* f exact */
+	/* q = f / F: a product with 1/F rounded, then the remainder (exact) times it */
+	double qh = f * inv, a, ae;
+	two_prod_short(qh, F, &a, &ae);
+	double ql = ((f - a) - ae) * inv;
 	/* log1p(q) = q - q^2/2 + q^3 L(q), q^2 exact */
 	double s, se, h, e;
-	two_prod(qh, qh, &s, &se);
+	two_sqr(qh, &s, &se);
 	two_sum(qh, -0.5 * s, &h, &e);
 	double lo = e + (ql - 0.5 * se - qh * ql + qh * s * poly(log1p_c, 6, qh));
 	/* + k ln2 + log F */
 	double kd = k, u, ue, t, te;
-	two_sum(kd * LN2_HI, log_tab[j - 90][0], &u, &ue);
-	two_sum(u, h, &t, &te);
+	/* Fast2Sum applies: |k ln2| >= ln2 > |log F| unless k = 0, and |log F| >=
+	 * log(129/128) > |h| unless F = 1 (then log F = 0) */
+	fast_two_sum(kd * LN2_HI, log_tab[j - 90][0], &u, &ue);
+	fast_two_sum(u, h, &t, &te);
 	lo += ue + te + (kd * LN2_LO + log_tab[j - 90][1]);
 	fast_two_sum(t, lo, rh, rl);
 }
@@ -781,7 +863,22 @@ double xm_log(double x)
 	return rh;
 }
 
-double xm_pow(double x, double y)
+/* sign * x^y for x > 0 finite, x != 1, 0 < |y| < 2^64 */
+static double pow_core(double x, double y, double sign)
+{
+	double lh, ll, zh, ze, z, zl;
+	log_core(x, &lh, &ll);
+	two_prod(y, lh, &zh, &ze);
+	fast_two_sum(zh, ze + y * ll, &z, &zl);
+	if (z > 710)
+		return sign * 0x1p1023 * 2.0;
+	if (z < -746)
+		return sign * 0x1p-1022 * 0x1p-1022;
+	return sign * exp_core(z, zl);
+}
+
+/* the special values of C99 F.9.4.4, and x < 0 */
+static double pow_special(double x, double y)
 {
 	if (y == 0 || x == 1)
 		return 1.0;
@@ -822,13 +919,17 @@ double xm_pow(double x, double y)
 		return sign;
 	if (ay >= 0x1p64) /* |y log x| >= 2^64 2^-53: far beyond the range */
 		return (x > 1) == (y > 0) ? sign * 0x1p1023 * 2.0 : sign * 0x1p-1022 * 0x1p-1022;
-	double lh, ll, zh, ze, z, zl;
-	log_core(x, &lh, &ll);
-	two_prod(y, lh, &zh, &ze);
-	fast_two_sum(zh, ze + y * ll, &z, &zl);
-	if (z > 710)
-		return sign * 0x1p1023 * 2.0;
-	if (z < -746)
-		return sign * 0x1p-1022 * 0x1p-1022;
-	return sign * exp_core(z, zl);
+	return pow_core(x, y, sign);
+}
+
+double xm_pow(double x, double y)
+{
+	if (x > 0 && x < INFINITY && x != 1 && y != 0 && fabs(y) < 0x1p64) { /* the common case first */
+		if (y == 1)
+			return x;
+		if (y == 2) /* fall-off 2: one correctly rounded product */
+			return x * x;
+		return pow_core(x, y, 1.0);
+	}
+	return pow_special(x, y);
 }

@@ -69,10 +69,17 @@ show("sin_c", S, maxrel(sin, lambda x: x + x ** 3 * horner(S, x * x), mpf(0), pi
 # cos(x) = 1 - x^2/2 + x^4 C(x^2)
 C = fit(lambda z: (cos(sqrt(z)) - 1 + z / 2) / (z * z), mpf(0), zmax, 7)
 show("cos_c", C, maxrel(cos, lambda x: 1 - x * x / 2 + x ** 4 * horner(C, x * x), mpf(0), pi / 4))
-# atan(t) = t + t^3 A(t^2), |t| <= 1/16
-tm = mpf(1) / 16
+# atan(t) = t + t^3 A(t^2): |t| <= 3.5/64 (no table entry), |t| <= 1/128 (after one)
+tm = mpf("3.5") / 64
 A = fit(lambda z: (atan(sqrt(z)) - sqrt(z)) / (z * sqrt(z)), mpf(0), tm * tm, 6)
 show("atan_c", A, maxrel(atan, lambda t: t + t ** 3 * horner(A, t * t), mpf(0), tm))
+tm = mpf(1) / 128
+A = fit(lambda z: (atan(sqrt(z)) - sqrt(z)) / (z * sqrt(z)), mpf(0), tm * tm, 3)
+show("atan_s", A, maxrel(atan, lambda t: t + t ** 3 * horner(A, t * t), mpf(0), tm))
+# asin(x) = x + x^3 P(x^2), |x| <= 1/2
+from mpmath import asin
+P = fit(lambda z: (asin(sqrt(z)) - sqrt(z)) / (z * sqrt(z)), mpf(0), mpf(1) / 4, 13)
+show("asin_c", P, maxrel(asin, lambda x: x + x ** 3 * horner(P, x * x), mpf(0), mpf(1) / 2))
 # exp(r) = 1 + r + r^2/2 + r^3 E(r), |r| <= ln2/128
 rm = ln2 / 128 * mpf("1.01")
 E = fit(lambda r: (exp(r) - 1 - r - r * r / 2) / r ** 3, -rm, rm, 6)
@@ -94,7 +101,13 @@ def table(name, vals, comment):
 
 table("exp_tab", [mpf(2) ** (mpf(j) / 64) for j in range(64)], "2^(j/64), j = 0..63, as hi + lo")
 table("log_tab", [log(mpf(j) / 128) for j in range(90, 182)], "log(j/128), j = 90..181, as hi + lo")
-table("atan_tab", [atan(mpf(i) / 8) for i in range(0, 33)], "atan(i/8), i = 0..32, as hi + lo")
+table("atan_tab", [atan(mpf(i) / 64) for i in range(0, 65)], "atan(i/64), i = 0..64, as hi + lo")
+print("/* 128/j, j = 90..181, rounded (log's reciprocals: only the rounding's size matters) */")
+print("static const double inv_tab[92] = {")
+vals = [hexd(mpf(128) / j) for j in range(90, 182)]
+for i in range(0, len(vals), 4):
+    print("\t" + ", ".join(vals[i:i + 4]) + ",")
+print("};")
 
 # 2/pi as 32-bit words, most significant first (bit 1 of the first word weighs 2^-1)
 words = []
