@@ -46,8 +46,8 @@ static const double atan_c[6] = { -0x1.5555555555555p-2, 0x1.9999999999986p-3, -
 static const double atan_s[3] = { -0x1.5555555555547p-2, 0x1.9999999199bf7p-3, -0x1.248cf3e2df98ep-3 };
 /* asin_c: 13 coefficients, max relative error of the fit 2^-57.4 */
 static const double asin_c[13] = { 0x1.5555555555556p-3, 0x1.3333333332ecap-4, 0x1.6db6db6e31f13p-5, 0x1.f1c71c1db0623p-6, 0x1.6e8bb1c8209a2p-6, 0x1.1c4d35cf95421p-6, 0x1.c9cf07674736ap-7, 0x1.782651caa6547p-7, 0x1.52420b04b37bep-7, 0x1.65a9c4dfcf8b2p-8, 0x1.1d189408314eep-6, -0x1.e6aaa8a0a04ccp-7, 0x1.d72b2bc8155f8p-6 };
-/* exp_c: 6 coefficients, max relative error of the fit 2^-71.6 */
-static const double exp_c[6] = { 0x1.5555555555555p-3, 0x1.5555555555555p-5, 0x1.1111111110df1p-7, 0x1.6c16c16c16997p-10, 0x1.a01a129ebaa14p-13, 0x1.a01a0f389a75bp-16 };
+/* exp_c: 4 coefficients, max relative error of the fit 2^-60.4 */
+static const double exp_c[4] = { 0x1.5555555555236p-3, 0x1.55555555553c6p-5, 0x1.11111dd009952p-7, 0x1.6c16ce2b0f35fp-10 };
 /* log1p_c: 6 coefficients, max relative error of the fit 2^-67.8 */
 static const double log1p_c[6] = { 0x1.5555555555557p-2, -0x1.0000000000002p-2, 0x1.99999997789e7p-3, -0x1.555555536ad9ap-3, 0x1.249509760c9fbp-3, -0x1.000279e304663p-3 };
 /* 2^(j/64), j = 0..63, as hi + lo */
@@ -779,13 +779,13 @@ double xm_acos(double x)
 
 /* exp(xh + xl), -746 < xh < 710, |xl| <= ulp(xh): overflows to inf and
  * underflows to subnormals and 0 on its own */
-static double exp_core(double xh, double xl)
+static inline double exp_core(double xh, double xl)
 {
 	double kd = rint_small(xh * INV_LN2_64);
 	int n = (int)kd, j = n & 63, k = (n - j) / 64;
 	/* kd LN2_64_HI exact (36-bit constant, |kd| < 2^17); xh - it exact (Sterbenz) */
 	double r = ((xh - kd * LN2_64_HI) - kd * LN2_64_LO) + xl;
-	double p = r + (0.5 * r * r + r * r * r * poly(exp_c, 6, r));
+	double p = r + (0.5 * r * r + r * r * r * poly(exp_c, 4, r));
 	double th = exp_tab[j][0], tl = exp_tab[j][1];
 	double s = th + (th * p + tl * (1 + p));
 	if (k > 1000)
@@ -810,7 +810,7 @@ double xm_exp(double x)
 
 /* log(x) as a double-double *rh + *rl, x > 0 finite; relative error below
  * 2^-68 */
-static void log_core(double x, double *rh, double *rl)
+static inline void log_core(double x, double *rh, double *rl)
 {
 	uint64_t ix = dbits(x);
 	int k = 0;
@@ -864,7 +864,7 @@ double xm_log(double x)
 }
 
 /* sign * x^y for x > 0 finite, x != 1, 0 < |y| < 2^64 */
-static double pow_core(double x, double y, double sign)
+static inline double pow_core(double x, double y, double sign)
 {
 	double lh, ll, zh, ze, z, zl;
 	log_core(x, &lh, &ll);

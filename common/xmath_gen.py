@@ -82,7 +82,7 @@ P = fit(lambda z: (asin(sqrt(z)) - sqrt(z)) / (z * sqrt(z)), mpf(0), mpf(1) / 4,
 show("asin_c", P, maxrel(asin, lambda x: x + x ** 3 * horner(P, x * x), mpf(0), mpf(1) / 2))
 # exp(r) = 1 + r + r^2/2 + r^3 E(r), |r| <= ln2/128
 rm = ln2 / 128 * mpf("1.01")
-E = fit(lambda r: (exp(r) - 1 - r - r * r / 2) / r ** 3, -rm, rm, 6)
+E = fit(lambda r: (exp(r) - 1 - r - r * r / 2) / r ** 3, -rm, rm, 4)
 show("exp_c", E, maxrel(lambda r: exp(r) - 1, lambda r: r + r * r / 2 + r ** 3 * horner(E, r), -rm, rm))
 # log1p(q) = q - q^2/2 + q^3 L(q), |q| <= 1/256 / (90/128)
 qm = mpf(1) / 256 / (mpf(90) / 128) * mpf("1.01")
