@@ -448,7 +448,7 @@ static int rem_pio2_large(double x, double *rh, double *rl)
 		a[k] = (uint64_t)w * ml;
 		b[k] = (uint64_t)w * mh;
 	}
-	uint32_t p[11];
+	uint32_t p[12]; /* two zero limbs above the product: get64 may read them */
 	uint64_t acc = 0;
 	for (int c = 0; c < 10; c++) {
 		if (c < 8)
@@ -460,7 +460,7 @@ static int rem_pio2_large(double x, double *rh, double *rl)
 		p[c] = (uint32_t)acc;
 		acc >>= 32;
 	}
-	p[10] = 0;
+	p[10] = p[11] = 0;
 	int B = 32 * (s + 8) - e; /* the bit of weight 2^0 */
 	int n = (int)(get64(p, B) & 3);
 	/* the fraction's top 192 bits f[0] (most significant) .. f[2] */

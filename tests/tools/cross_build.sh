@@ -2,7 +2,8 @@
 # tests/tools/cross_build.sh DIR - the other builds `make test-cross` tests
 # (tests/e2e/cross_*.sh), each a worker (and the xmath_hash tool) under
 # DIR/NAME, with its outcome in DIR/NAME/status ("built", "refused" when the
-# compiler stopped it on purpose, "failed", or "skipped: why"):
+# compiler stopped it on purpose, "failed", or "skipped: why") and a checksum
+# of the sources in DIR/NAME/sources:
 #   clang     CC=clang
 #   fastmath  CFLAGS adding -ffast-math (must not compile: common/xmath.h)
 #   contract  CFLAGS adding -mfma -ffp-contract=fast: compiles, changes values
@@ -16,6 +17,8 @@ JOBS=${JOBS:--j2}
 OPT=${OPT:--O3}
 
 have() { command -v "$1" >/dev/null 2>&1; }
+# the sources a worker is built from: tests/e2e/cross_lib.inc skips a build older than them
+sources() { cat common/*.[ch] proto/*.[ch] worker/*.[ch] tests/tools/xmath_hash.c Makefile | cksum; }
 
 # variant NAME [make variables...]: builds NAME's worker and xmath_hash
 variant() {
@@ -31,6 +34,7 @@ variant() {
 	else
 		echo failed >"$b/status"
 	fi
+	sources >"$b/sources"
 	echo "cross build $n: $(cat "$b/status") (log $b/build.log)"
 }
 
