@@ -788,11 +788,11 @@ static inline double exp_core(double xh, double xl)
 	double p = r + (0.5 * r * r + r * r * r * poly(exp_c, 4, r));
 	double th = exp_tab[j][0], tl = exp_tab[j][1];
 	double s = th + (th * p + tl * (1 + p));
+	if ((unsigned)(k + 1000) <= 2000u)
+		return s * bits_d((uint64_t)(k + 1023) << 52);
 	if (k > 1000)
 		return s * bits_d((uint64_t)(k - 1 + 1023) << 52) * 2.0;
-	if (k < -1000)
-		return s * bits_d((uint64_t)(k + 1000 + 1023) << 52) * 0x1p-1000;
-	return s * bits_d((uint64_t)(k + 1023) << 52);
+	return s * bits_d((uint64_t)(k + 1000 + 1023) << 52) * 0x1p-1000;
 }
 
 double xm_exp(double x)
@@ -924,7 +924,9 @@ static double pow_special(double x, double y)
 
 double xm_pow(double x, double y)
 {
-	if (x > 0 && x < INFINITY && x != 1 && y != 0 && fabs(y) < 0x1p64) { /* the common case first */
+	uint64_t ix = dbits(x), iy = dbits(y) & 0x7fffffffffffffffull;
+	/* the common case first: 0 < x < inf, x != 1, 0 < |y| < 2^64 */
+	if (ix - 1 < 0x7fefffffffffffffull && iy - 1 < 0x43efffffffffffffull && x != 1) {
 		if (y == 1)
 			return x;
 		if (y == 2) /* fall-off 2: one correctly rounded product */
