@@ -2,6 +2,7 @@
 #   make              build bin/portray-master and bin/portray-worker
 #   make test         build and run every test (ends with "N passed, N failed, N skipped")
 #   make test-deploy  only the deployment tests (tests/deploy/*.sh: a real single-node Slurm)
+#   make test-cross   clang, -ffast-math, -ffp-contract=fast and aarch64 (qemu) workers against this build
 #   make bench        print speed and memory figures
 #   make fuzz         run the libFuzzer targets (clang)  FUZZ_SECONDS=600
 #   make install      PREFIX=/usr/local DESTDIR=  (binaries, man pages, systemd units, docs)
@@ -56,7 +57,7 @@ FUZZ_REPLAY:= $(patsubst tests/fuzz/%.c,$(BUILD)/tests/%-replay,$(FUZZ_SRC))
 BENCH_BIN  := $(patsubst bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 TOOLS_BIN  := $(patsubst tests/tools/%.c,$(BUILD)/tools/%,$(TOOLS_SRC))
 
-.PHONY: all test test-deploy bench fuzz install uninstall clean
+.PHONY: all test test-deploy test-cross bench fuzz install uninstall clean
 # keep test and fuzz objects (chained pattern rules would delete them as intermediates)
 .SECONDARY:
 all: $(MASTER_BIN) $(WORKER_BIN)
@@ -109,6 +110,12 @@ test: all $(UNIT_BIN) $(FUZZ_REPLAY) $(TOOLS_BIN)
 # tests/deploy/*.sh through the same runner (they are part of make test too)
 test-deploy: all
 	@BUILD=$(BUILD) TEST_FILTER=deploy/ sh tests/run.sh
+
+# other builds' workers (tests/tools/cross_build.sh) against this master:
+# tests/e2e/cross_*.sh, which make test skips until these are built
+test-cross: all $(TOOLS_BIN)
+	@MAKE="$(MAKE)" sh tests/tools/cross_build.sh build/cross
+	@BUILD=$(BUILD) TEST_FILTER=e2e/cross_ sh tests/run.sh
 
 bench: all $(BENCH_BIN) $(TOOLS_BIN)
 	@BUILD=$(BUILD) sh bench/run.sh

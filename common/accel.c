@@ -73,6 +73,7 @@
 
 #include "common/accel_int.h"
 #include "common/cancel.h"
+#include "common/xmath.h"
 
 /* Subtrees a traversal pops between polls of the cancel flag: each pop
  * follows a leaf (at most ACCEL_LEAF_CHUNK references, instances polling
@@ -646,11 +647,11 @@ static void surface_complete(const struct scene *s, struct hit *h)
 		/* the default frame: P = +y, E = +x, W = P x E = -z (as geom_surface) */
 		const struct prim_sphere *ps = &s->objects[h->object].u.sphere;
 		vec3 q = h->n;
-		double phi = atan2(-q.z, q.x);
+		double phi = xm_atan2(-q.z, q.x);
 		if (phi < 0)
 			phi += 2 * M_PI;
 		h->u = ps->radius * (phi >= 2 * M_PI ? 0 : phi);
-		h->v = ps->radius * (asin(q.y > 1 ? 1 : q.y < -1 ? -1 : q.y) + M_PI / 2);
+		h->v = ps->radius * (xm_asin(q.y > 1 ? 1 : q.y < -1 ? -1 : q.y) + M_PI / 2);
 		h->mp = h->p;
 	} else {
 		const struct gmesh *m = h->surf;

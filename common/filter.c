@@ -19,6 +19,7 @@
 
 #include "common/cancel.h"
 #include "common/rng.h"
+#include "common/xmath.h"
 
 /* Purpose tag for the filters' own random numbers (the layer index is added),
  * so they never coincide with the streams shading derives from the seed. */
@@ -194,8 +195,9 @@ static vec3 expand(struct walk *w, int layer, struct sample smp)
 			/* uniform point in a disk of radius R: r = R sqrt(u1), angle 2 pi u2 */
 			uint64_t rs = rng_derive(seed_of(w->sx, w->sy, c.s), FILTER_RNG_TAG + (uint64_t)layer);
 			double u1 = rng_uniform(rs, 0), u2 = rng_uniform(rs, 1);
-			double rr = f->radius * sqrt(u1), phi = 2.0 * M_PI * u2;
-			double du = rr * cos(phi), dv = rr * sin(phi);
+			double rr = f->radius * sqrt(u1), phi = 2.0 * M_PI * u2, sn, cs;
+			xm_sincos(phi, &sn, &cs);
+			double du = rr * cs, dv = rr * sn;
 			if (f->kind == FILTER_DISK) {
 				c.px += du;
 				c.py += dv;

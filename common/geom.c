@@ -42,6 +42,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "common/xmath.h"
+
 /* ---- boxes ---------------------------------------------------------------- */
 
 struct geom_box geom_box_empty(void)
@@ -98,7 +100,7 @@ void geom_frame(vec3 n, vec3 *x, vec3 *y)
 /* Angle of (a, b) in [0, 2 pi). */
 static double angle_2pi(double b, double a)
 {
-	double phi = atan2(b, a);
+	double phi = xm_atan2(b, a);
 	if (phi < 0)
 		phi += 2 * M_PI;
 	if (phi >= 2 * M_PI)
@@ -636,7 +638,7 @@ static inline __attribute__((always_inline)) void surface(const struct geom_obj 
 		*u = r * angle_2pi(v3_dot(q, g->u.sph.W), v3_dot(q, g->u.sph.E));
 		double s = v3_dot(q, g->u.sph.P);
 		s = s > 1 ? 1 : s < -1 ? -1 : s;
-		*v = r * (asin(s) + M_PI / 2);
+		*v = r * (xm_asin(s) + M_PI / 2);
 		break;
 	}
 	case PRIM_PLANE:

@@ -32,6 +32,7 @@
 
 #include "common/img.h"
 #include "common/img_int.h"
+#include "common/xmath.h"
 
 /* ---- conversions ------------------------------------------------------------------ */
 
@@ -42,7 +43,7 @@ double img_srgb_to_linear(double v)
 	if (v < 0)
 		return -img_srgb_to_linear(-v);
 	/* IEC 61966-2-1: the linear segment below 0.04045, the 2.4 power above */
-	return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
+	return v <= 0.04045 ? v / 12.92 : xm_pow((v + 0.055) / 1.055, 2.4);
 }
 
 void img_linear_table(float table[256])

@@ -65,6 +65,7 @@
 #include <string.h>
 
 #include "common/lex.h"
+#include "common/xmath.h"
 
 /* ---- numbers ------------------------------------------------------------ */
 
@@ -410,7 +411,7 @@ static vec3 *raw_normals(const vec3 *v, uint32_t nv, const uint32_t *t, uint32_t
 			vec3 p = v[c[k]];
 			vec3 e1 = raw_unit_scaled(v3_sub(v[c[(k + 1) % 3]], p));
 			vec3 e2 = raw_unit_scaled(v3_sub(v[c[(k + 2) % 3]], p));
-			double ang = atan2(v3_len(v3_cross(e1, e2)), v3_dot(e1, e2));
+			double ang = xm_atan2(v3_len(v3_cross(e1, e2)), v3_dot(e1, e2));
 			n[c[k]] = v3_add(n[c[k]], v3_scale(fn, ang));
 		}
 	}

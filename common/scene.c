@@ -10,6 +10,8 @@
 #include <string.h>
 #include <strings.h>
 
+#include "common/xmath.h"
+
 int scene_errorf(struct scene_error *err, int level, const char *fmt, ...)
 {
 	if (err) {
@@ -724,7 +726,7 @@ int scene_xform_op(mat34 *m, enum xform_op op, int axis, double amount, vec3 v)
 			return 0;
 		/* right-handed: positive angles turn y toward z (x-rotate), z toward x
 		 * (y-rotate), x toward y (z-rotate) */
-		double a = amount * (M_PI / 180.0), c = cos(a), sn = sin(a);
+		double a = amount * (M_PI / 180.0), c = xm_cos(a), sn = xm_sin(a);
 		int i = (axis + 1) % 3, j = (axis + 2) % 3;
 		t.m[i][i] = c;
 		t.m[i][j] = -sn;

@@ -22,6 +22,7 @@
 #include "common/cancel.h"
 #include "common/rng.h"
 #include "common/shader.h"
+#include "common/xmath.h"
 
 /* A ray whose contribution to the pixel would be below this is not traced:
  * 1/512 is a quarter of one 8-bit step at full brightness. */
@@ -141,14 +142,16 @@ static vec3 light_point(const struct shade_light *L, int k, int n, double r1, do
 	double u2 = frac(k * GOLDEN_FRAC + r2);
 	switch (l->shape) {
 	case LIGHT_SPHERE: {
-		double z = 1 - 2 * u1, rho = sqrt(fmax(0, 1 - z * z)), phi = 2 * M_PI * u2;
-		vec3 d = v3(rho * cos(phi), rho * sin(phi), z);
+		double z = 1 - 2 * u1, rho = sqrt(fmax(0, 1 - z * z)), phi = 2 * M_PI * u2, sn, cs;
+		xm_sincos(phi, &sn, &cs);
+		vec3 d = v3(rho * cs, rho * sn, z);
 		return v3_add(l->sphere.centre, v3_scale(d, l->sphere.radius));
 	}
 	case LIGHT_CYLINDER: {
-		double phi = 2 * M_PI * u2, r = l->cylinder.radius;
+		double phi = 2 * M_PI * u2, r = l->cylinder.radius, sn, cs;
+		xm_sincos(phi, &sn, &cs);
 		vec3 axis = v3_sub(l->cylinder.to, l->cylinder.from);
-		vec3 rad = v3_add(v3_scale(L->e1, cos(phi)), v3_scale(L->e2, sin(phi)));
+		vec3 rad = v3_add(v3_scale(L->e1, cs), v3_scale(L->e2, sn));
 		if (l->cylinder.capped) { /* u1 picks side or a cap by area */
 			double side = 2 * M_PI * r * v3_len(axis), cap = M_PI * r * r;
 			double t = u1 * (side + 2 * cap);
@@ -270,11 +273,11 @@ static vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, c
 			if (want_spec) {
 				double rv = v3_dot(v3_sub(v3_scale(n, 2 * ndotl), ldir), v);
 				if (rv > 0)
-					hl = pow(rv, m->spec_power);
+					hl = xm_pow(rv, m->spec_power);
 			}
 			vec3 in = l->colour;
 			if (l->fall_off != 0)
-				in = v3_scale(in, 1 / pow(dist, l->fall_off));
+				in = v3_scale(in, 1 / xm_pow(dist, l->fall_off));
 			vec3 term = v3_mul(in, v3_add(v3_scale(kcd, ndotl), v3_scale(kcs, hl)));
 			if (maxabs(term) * weight < cut * n_samples)
 				continue;

@@ -511,6 +511,7 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	f.px = px;
 	f.cancel = cancel;
 	f.lfd = -1;
+	(void)proto_build_id(); /* the pixel probe, rendered now (a few ms), not in the first handshake */
 	int rc = EXIT_USAGE;
 	struct worker_addr *addrs = NULL;
 	struct local L;

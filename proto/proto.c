@@ -15,14 +15,12 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "common/probe.h"
 #include "common/render.h"
 #include "proto/serial.h"
 
 /* ---- small pure helpers ---- */
 
-#ifndef PORTRAY_VERSION
-#define PORTRAY_VERSION "dev"
-#endif
 /* the versions as plain numbers for the build id (the header constants carry a u suffix) */
 #define PROTO_BUILD_PROTO 3
 #define PROTO_BUILD_SCENE 1
@@ -33,33 +31,29 @@ _Static_assert(PROTO_BUILD_PROTO == PROTO_VERSION && PROTO_BUILD_SCENE == PROTO_
 #define PROTO_BUILD_PIXELS 2
 _Static_assert(PROTO_BUILD_PIXELS == RENDER_PIXEL_REV, "build id numbers");
 
-/* The compiler and the architecture: floating-point code generation differs
- * between them, and the promise is byte-identical pixels. */
-#if defined(__clang__)
-#define BUILD_CC "clang-" STR(__clang_major__) "." STR(__clang_minor__) "." STR(__clang_patchlevel__)
-#elif defined(__GNUC__)
-#define BUILD_CC "gcc-" STR(__GNUC__) "." STR(__GNUC_MINOR__) "." STR(__GNUC_PATCHLEVEL__)
-#else
-#define BUILD_CC "cc"
-#endif
-#if defined(__x86_64__)
-#define BUILD_ARCH "x86_64"
-#elif defined(__aarch64__)
-#define BUILD_ARCH "aarch64"
-#elif defined(__i386__)
-#define BUILD_ARCH "i386"
-#else
-#define BUILD_ARCH "other"
-#endif
+/* What decides whether two builds may share a render: the protocol and
+ * scene encoding they speak and the pixels' revision, then the pixels
+ * themselves, proven by the probe (common/probe.h) rendered at the first
+ * call. The compiler, its flags, the C library and the CPU are left out:
+ * the pixel path computes in plain IEEE-754 doubles with in-tree maths
+ * (common/xmath.h), and a build that still draws other pixels shows it in
+ * its probe. */
+#define BUILD_COMPAT "proto-" STR(PROTO_BUILD_PROTO) "/scene-" STR(PROTO_BUILD_SCENE) "/pixels-" STR(PROTO_BUILD_PIXELS)
+#define BUILD_PROBE "/probe-"
+static pthread_once_t build_once = PTHREAD_ONCE_INIT;
+static char build_id[sizeof BUILD_COMPAT BUILD_PROBE + 16];
+_Static_assert(sizeof build_id - 1 <= LIM_BUILD_ID, "the build id fits HELLO");
+
+static void build_id_init(void)
+{
+	snprintf(build_id, sizeof build_id, "%s%s%016llx", BUILD_COMPAT, BUILD_PROBE,
+		 (unsigned long long)probe_hash());
+}
 
 const char *proto_build_id(void)
 {
-	/* Two builds that agree on all of these trace the same pixels: the same
-	 * sources (version, pixel revision), encodings, compiler and architecture. */
-	static const char id[] = "portray-" PORTRAY_VERSION "/proto-" STR(PROTO_BUILD_PROTO) "/scene-" STR(
-		PROTO_BUILD_SCENE) "/pixels-" STR(PROTO_BUILD_PIXELS) "/" BUILD_CC "/" BUILD_ARCH;
-	_Static_assert(sizeof id - 1 <= LIM_BUILD_ID, "the build id fits HELLO");
-	return id;
+	pthread_once(&build_once, build_id_init);
+	return build_id;
 }
 
 int proto_hello_check(const struct proto_msg *m, enum proto_role want, bool have_secret, uint32_t my_version,
@@ -77,9 +71,18 @@ int proto_hello_check(const struct proto_msg *m, enum proto_role want, bool have
 		snprintf(why, whylen, "peer is not a %s", peer);
 		return PERR_PROTOCOL;
 	}
-	if (strcmp(h->build, proto_build_id()) != 0) {
+	const char *mine = proto_build_id();
+	size_t compat = sizeof BUILD_COMPAT BUILD_PROBE - 1;
+	if (strncmp(h->build, mine, compat) != 0) {
 		snprintf(why, whylen, "core build mismatch: the %s runs '%s', this %s runs '%s'", peer, h->build, me,
-			 proto_build_id());
+			 mine);
+		return PERR_BUILD;
+	}
+	if (strcmp(h->build + compat, mine + compat) != 0 || strcmp(mine + compat, "0000000000000000") == 0) {
+		snprintf(why, whylen,
+			 "pixel probe mismatch: the %s's probe image hashes to %.16s, this %s's to %s: their "
+			 "compilers, flags or CPUs make different pixels (docs/maths.md)",
+			 peer, h->build + compat, me, mine + compat);
 		return PERR_BUILD;
 	}
 	if (h->secret && !have_secret) {

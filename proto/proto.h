@@ -180,7 +180,13 @@ int proto_header_parse(const uint8_t *p, size_t len, uint16_t *type, uint16_t *v
  */
 int proto_msg_decode(uint16_t type, const uint8_t *p, uint32_t len, struct proto_msg *m, const char **why);
 
-/* The core build id both sides must share for byte-identical pixels. */
+/*
+ * The build id HELLO carries: "proto-N/scene-N/pixels-N/probe-HHHHHHHHHHHHHHHH",
+ * what decides compatibility (protocol, scene encoding, pixel revision) and
+ * the 64-bit fingerprint of the pixel probe (common/probe.h), rendered at the
+ * first call (a few milliseconds; thread-safe). A peer must match both:
+ * proto_hello_check says which one differs.
+ */
 const char *proto_build_id(void);
 /*
  * The one HELLO check, both sides: m is the peer's HELLO; `want` the role the

@@ -14,7 +14,7 @@ static const struct {
 	{ "bad-checksum", FAULT_BAD_CHECKSUM }, { "wrong-size", FAULT_WRONG_SIZE },
 	{ "proto-version", FAULT_PROTO_VERSION }, { "build-id", FAULT_BUILD },
 	{ "black", FAULT_BLACK }, { "trace-fail", FAULT_TRACE_FAIL },
-	{ "lie", FAULT_LIE }, { "hang-tile", FAULT_HANG_TILE },
+	{ "lie", FAULT_LIE }, { "hang-tile", FAULT_HANG_TILE }, { "probe", FAULT_PROBE },
 };
 
 int wk_fault_parse(const char *name, enum wk_fault *out)
@@ -34,7 +34,14 @@ uint32_t wk_fault_version(const struct wk_faults *f)
 
 void wk_fault_build_id(const struct wk_faults *f, char *out, size_t n)
 {
-	snprintf(out, n, "%s%s", proto_build_id(), f->kind == FAULT_BUILD ? "-other" : "");
+	const char *id = proto_build_id(), *probe = strstr(id, "/probe-");
+	int compat = probe ? (int)(probe - id) : (int)strlen(id);
+	if (f->kind == FAULT_BUILD) /* another pixel revision: "pixels-N-other" */
+		snprintf(out, n, "%.*s-other%s", compat, id, id + compat);
+	else if (f->kind == FAULT_PROBE) /* the probe's last digit changed */
+		snprintf(out, n, "%.*s%c", (int)strlen(id) - 1, id, id[strlen(id) - 1] == '0' ? '1' : '0');
+	else
+		snprintf(out, n, "%s", id);
 }
 
 static bool cancelled(atomic_int *cancel)

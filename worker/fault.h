@@ -37,7 +37,8 @@ enum wk_fault {
 	FAULT_TRACE_FAIL,   /* every tile fails as if out of memory */
 	FAULT_LIE,          /* every WK_LIE_EVERY-th tile traced, from the second: one pixel's low bit
 			     * flipped before the checksum (wrong pixels, valid checksum) */
-	FAULT_HANG_TILE     /* the WK_HANG_AT-th tile traced never finishes (until its job is cancelled) */
+	FAULT_HANG_TILE,    /* the WK_HANG_AT-th tile traced never finishes (until its job is cancelled) */
+	FAULT_PROBE         /* claims another pixel probe fingerprint (a build that draws other pixels) */
 };
 
 struct wk_faults {

@@ -216,6 +216,13 @@ int main(int argc, char **argv)
 	}
 	if (secret_file && warn[0])
 		fprintf(stderr, "portray-worker: warning: --secret-file %s\n", warn);
+	/* the pixel probe, rendered once before anything listens (a few ms): HELLO
+	 * carries its fingerprint in the build id (proto_build_id) */
+	if (strstr(proto_build_id(), "/probe-0000000000000000")) {
+		fprintf(stderr, "portray-worker: the pixel probe could not be rendered (out of memory)\n");
+		free(opt.secret);
+		return WK_EXIT_OSERR;
+	}
 	char host[NET_HOST_LEN] = "";
 	int bound = -1, lfd = -1;
 	if (!connect_to && !listen_at)

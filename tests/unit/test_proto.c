@@ -13,10 +13,13 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "common/probe.h"
+#include "common/render.h"
 #include "check.h"
 #include "common/render.h"
 #include "proto/net.h"
 #include "proto/proto.h"
+#include "proto/serial.h"
 #include "proto/sha256.h"
 
 static struct proto_conn *A, *B;
@@ -391,11 +394,48 @@ static void test_net_and_secret(void)
 	close(l);
 }
 
+/* The build id is the compatibility part and the probe's fingerprint, no
+ * compiler or architecture; proto_hello_check names which part differs. */
+static void test_hello_build(void)
+{
+	const char *id = proto_build_id();
+	char want[80];
+	snprintf(want, sizeof want, "proto-%u/scene-%u/pixels-%d/probe-%016llx", PROTO_VERSION, PROTO_SCENE_VERSION,
+		 RENDER_PIXEL_REV, (unsigned long long)probe_hash());
+	CHECK(strcmp(id, want) == 0);
+	CHECK(probe_hash() != 0 && probe_compute() == probe_hash()); /* the probe is deterministic */
+	CHECK(strstr(id, "gcc") == NULL && strstr(id, "clang") == NULL && strstr(id, "x86") == NULL);
+	struct proto_msg m;
+	memset(&m, 0, sizeof m);
+	m.type = MSG_HELLO;
+	m.frame_version = PROTO_VERSION;
+	m.u.hello.version = PROTO_VERSION;
+	m.u.hello.role = ROLE_WORKER;
+	char why[LIM_ERROR_TEXT + 1];
+	snprintf(m.u.hello.build, sizeof m.u.hello.build, "%s", id);
+	CHECK(proto_hello_check(&m, ROLE_WORKER, false, PROTO_VERSION, why, sizeof why) == 0);
+	/* another probe: refused, and the message says it is the pixels */
+	m.u.hello.build[strlen(id) - 1] = id[strlen(id) - 1] == 'f' ? 'e' : 'f';
+	CHECK(proto_hello_check(&m, ROLE_WORKER, false, PROTO_VERSION, why, sizeof why) == PERR_BUILD);
+	CHECK(strstr(why, "pixel probe mismatch: the worker's probe image hashes to ") == why);
+	CHECK(strstr(why, id + strlen(id) - 16) != NULL);
+	/* another pixel revision: a core build mismatch */
+	snprintf(m.u.hello.build, sizeof m.u.hello.build, "proto-%u/scene-%u/pixels-%d/probe-%s", PROTO_VERSION,
+		 PROTO_SCENE_VERSION, RENDER_PIXEL_REV + 1, id + strlen(id) - 16);
+	CHECK(proto_hello_check(&m, ROLE_WORKER, false, PROTO_VERSION, why, sizeof why) == PERR_BUILD);
+	CHECK(strstr(why, "core build mismatch: the worker runs 'proto-") == why);
+	/* an old-style build string */
+	snprintf(m.u.hello.build, sizeof m.u.hello.build, "portray-0.11.0/proto-2/scene-1/pixels-2/gcc-12.2.0/x86_64");
+	CHECK(proto_hello_check(&m, ROLE_WORKER, false, PROTO_VERSION, why, sizeof why) == PERR_BUILD);
+	CHECK(strstr(why, "core build mismatch") == why);
+}
+
 int main(void)
 {
 	test_crc_threads(); /* first: nothing else has filled the CRC table yet */
 	test_conn_limit();
 	test_round_trips();
+	test_hello_build();
 	test_short_reads();
 	test_bad_frames();
 	test_crypto_glue();
