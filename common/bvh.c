@@ -52,8 +52,6 @@ struct bvh_task {
 
 struct bvh_ctx {
 	const struct geom_box *boxes;
-	vec3 *cent;
-	double *area;       /* box_area of each item */
 	uint32_t *perm;
 	struct bvh_node *nodes;
 	atomic_uint n_nodes; /* nodes handed out (any thread) */
@@ -123,6 +121,10 @@ static inline void box_grow_pt(struct geom_box *r, vec3 p)
 	r->hi.x = mx(r->hi.x, p.x), r->hi.y = mx(r->hi.y, p.y), r->hi.z = mx(r->hi.z, p.z);
 }
 
+/* An item's centroid (recomputed where needed: an array of them would
+ * be 24 bytes per item more at the build's peak). */
+static inline vec3 cent_of(const struct geom_box *b) { return v3_scale(v3_add(b->lo, b->hi), 0.5); }
+
 /* The bin of centroid coordinate c on an axis binned from lo at scale. */
 static inline int bin_of(double c, double lo, double scale)
 {
@@ -141,8 +143,8 @@ static void span_of(const struct bvh_ctx *B, uint32_t begin, uint32_t end, struc
 			return;
 		uint32_t it = B->perm[i];
 		box_grow(&sp->bb, &B->boxes[it]);
-		box_grow_pt(&sp->cb, B->cent[it]);
-		sp->amax = mx(sp->amax, B->area[it]);
+		box_grow_pt(&sp->cb, cent_of(&B->boxes[it]));
+		sp->amax = mx(sp->amax, box_area(B->boxes[it]));
 	}
 }
 
@@ -150,8 +152,8 @@ static void span_of(const struct bvh_ctx *B, uint32_t begin, uint32_t end, struc
 static inline void span_add(const struct bvh_ctx *B, struct bvh_span *sp, uint32_t it)
 {
 	box_grow(&sp->bb, &B->boxes[it]);
-	box_grow_pt(&sp->cb, B->cent[it]);
-	sp->amax = mx(sp->amax, B->area[it]);
+	box_grow_pt(&sp->cb, cent_of(&B->boxes[it]));
+	sp->amax = mx(sp->amax, box_area(B->boxes[it]));
 }
 
 /*
@@ -171,7 +173,8 @@ static uint32_t partition(struct bvh_ctx *B, uint32_t begin, uint32_t end, int a
 		if (cancel_poll_every(i))
 			return i;
 		uint32_t it = B->perm[i];
-		bool first = big > 0 ? B->area[it] > big : bin_of(v3_comp(B->cent[it], axis), lo, scale) < split_bin;
+		const struct geom_box *ib = &B->boxes[it];
+		bool first = big > 0 ? box_area(*ib) > big : bin_of(v3_comp(cent_of(ib), axis), lo, scale) < split_bin;
 		if (first) {
 			span_add(B, left, it);
 			i++;
@@ -289,7 +292,7 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 			return;
 		uint32_t it = B->perm[i];
 		const struct geom_box *ib = &B->boxes[it];
-		vec3 c = B->cent[it];
+		vec3 c = cent_of(ib);
 		for (int l = 0; l < n_live; l++) {
 			int axis = live[l];
 			struct bvh_bin *bk = &bin[axis][bin_of(v3_comp(c, axis), lo3[axis], scale3[axis])];
@@ -322,7 +325,7 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 				return;
 			uint32_t it = B->perm[i];
 			const struct geom_box *ib = &B->boxes[it];
-			double a = B->area[it];
+			double a = box_area(*ib);
 			for (int q = 0; q < 3; q++) {
 				if (a > thr[q])
 					box_grow(&b1[q], ib), n1[q]++;
@@ -534,23 +537,12 @@ int bvh_build_ex(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32
 	atomic_init(&B.gave_up, 0);
 	B.max_leaf = max_leaf ? max_leaf : 1;
 	B.pack = pack;
-	B.cent = malloc((size_t)n * sizeof *B.cent);
-	B.area = malloc((size_t)n * sizeof *B.area);
 	B.nodes = malloc((size_t)2 * n * sizeof *B.nodes);
-	if (!B.cent || !B.area || !B.nodes) {
-		free(B.cent);
-		free(B.area);
-		free(B.nodes);
+	if (!B.nodes)
 		return -1;
-	}
-	for (uint32_t i = 0; i < n; i++) {
+	for (uint32_t i = 0; i < n; i++)
 		perm[i] = i;
-		B.cent[i] = v3_scale(v3_add(boxes[i].lo, boxes[i].hi), 0.5);
-		B.area[i] = box_area(boxes[i]);
-	}
 	build_all(&B, n);
-	free(B.cent);
-	free(B.area);
 	if (cancel_seen()) {
 		free(B.nodes);
 		return BVH_CANCELLED;
