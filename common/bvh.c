@@ -67,11 +67,27 @@ struct bvh_ctx {
 	atomic_int *flag;   /* the calling thread's cancel flag, for the others */
 };
 
+/* The float one step below f (not NaN, not -inf): nextafterf(f, -INFINITY)
+ * without the call (a node's bounds make six). */
+static inline float float_down(float f)
+{
+	uint32_t u;
+	memcpy(&u, &f, sizeof u);
+	if (f > 0)
+		u--;
+	else if (f < 0)
+		u++;
+	else
+		u = 0x80000001u; /* -0 and +0: the negative subnormal */
+	memcpy(&f, &u, sizeof f);
+	return f;
+}
+
 static float round_down(double x)
 {
 	float f = (float)x;
 	if ((double)f > x)
-		f = nextafterf(f, -INFINITY);
+		f = float_down(f);
 	return f;
 }
 
@@ -79,7 +95,7 @@ static float round_up(double x)
 {
 	float f = (float)x;
 	if ((double)f < x)
-		f = nextafterf(f, INFINITY);
+		f = -float_down(-f);
 	return f;
 }
 
@@ -91,7 +107,9 @@ static double box_area(struct geom_box b)
 	return 2 * (e.x * e.y + e.y * e.z + e.z * e.x);
 }
 
-/* geom_box_union and geom_box_point, inline (the same comparisons) */
+/* geom_box_empty, geom_box_union and geom_box_point, inline (the same
+ * values and comparisons) */
+#define EMPTY_BOX ((struct geom_box){ { INFINITY, INFINITY, INFINITY }, { -INFINITY, -INFINITY, -INFINITY } })
 static inline double mn(double a, double b) { return a < b ? a : b; }
 static inline double mx(double a, double b) { return a > b ? a : b; }
 #ifdef __SSE2__
@@ -115,11 +133,24 @@ static inline void box_grow(struct geom_box *r, const struct geom_box *b)
 	r->hi.x = mx(r->hi.x, b->hi.x), r->hi.y = mx(r->hi.y, b->hi.y), r->hi.z = mx(r->hi.z, b->hi.z);
 }
 #endif
+#ifdef __SSE2__
+static inline void box_grow_pt(struct geom_box *r, vec3 p)
+{
+	double *pr = &r->lo.x;
+	__m128d pxy = _mm_loadu_pd(&p.x), pz = _mm_set1_pd(p.z);
+	__m128d mid = _mm_loadu_pd(pr + 2); /* lo.z, hi.x */
+	_mm_storeu_pd(pr, _mm_min_pd(_mm_loadu_pd(pr), pxy));
+	__m128d zx = _mm_move_sd(_mm_max_pd(mid, _mm_unpacklo_pd(pz, pxy)), _mm_min_pd(mid, pz));
+	_mm_storeu_pd(pr + 2, zx); /* lo.z from the min, hi.x from the max */
+	_mm_storeu_pd(pr + 4, _mm_max_pd(_mm_loadu_pd(pr + 4), _mm_unpackhi_pd(pxy, pz)));
+}
+#else
 static inline void box_grow_pt(struct geom_box *r, vec3 p)
 {
 	r->lo.x = mn(r->lo.x, p.x), r->lo.y = mn(r->lo.y, p.y), r->lo.z = mn(r->lo.z, p.z);
 	r->hi.x = mx(r->hi.x, p.x), r->hi.y = mx(r->hi.y, p.y), r->hi.z = mx(r->hi.z, p.z);
 }
+#endif
 
 /* An item's centroid (recomputed where needed: an array of them would
  * be 24 bytes per item more at the build's peak). */
@@ -135,8 +166,8 @@ static inline int bin_of(double c, double lo, double scale)
 /* The span of perm[begin, end), item by item. */
 static void span_of(const struct bvh_ctx *B, uint32_t begin, uint32_t end, struct bvh_span *sp)
 {
-	sp->bb = geom_box_empty();
-	sp->cb = geom_box_empty();
+	sp->bb = EMPTY_BOX;
+	sp->cb = EMPTY_BOX;
 	sp->amax = 0;
 	for (uint32_t i = begin; i < end; i++) {
 		if (cancel_poll_every(i))
@@ -167,7 +198,7 @@ static uint32_t partition(struct bvh_ctx *B, uint32_t begin, uint32_t end, int a
 			  double scale, int split_bin, double big, struct bvh_span *left, struct bvh_span *right)
 {
 	uint32_t i = begin, j = end;
-	left->bb = left->cb = right->bb = right->cb = geom_box_empty();
+	left->bb = left->cb = right->bb = right->cb = EMPTY_BOX;
 	left->amax = right->amax = 0;
 	while (i < j) {
 		if (cancel_poll_every(i))
@@ -231,7 +262,7 @@ static bool best_split(const struct bvh_bin *bn, double *best, int *best_bin)
 			used[nu++] = k;
 	/* right_cost[u]: the bins from used[u] up */
 	double right_cost[BVH_BINS];
-	struct geom_box acc = geom_box_empty();
+	struct geom_box acc = EMPTY_BOX;
 	uint32_t cnt = 0;
 	for (int u = nu - 1; u > 0; u--) {
 		box_grow(&acc, &bn[used[u]].b);
@@ -239,7 +270,7 @@ static bool best_split(const struct bvh_bin *bn, double *best, int *best_bin)
 		right_cost[u] = box_area(acc) * cnt;
 	}
 	bool better = false;
-	acc = geom_box_empty();
+	acc = EMPTY_BOX;
 	cnt = 0;
 	for (int u = 0; u + 1 < nu; u++) { /* split before bin used[u] + 1 */
 		box_grow(&acc, &bn[used[u]].b);
@@ -317,7 +348,7 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 		uint32_t n1[3] = { 0, 0, 0 };
 		double thr[3];
 		for (int q = 0; q < 3; q++) {
-			b1[q] = b2[q] = geom_box_empty();
+			b1[q] = b2[q] = EMPTY_BOX;
 			thr[q] = big_frac[q] * node_area;
 		}
 		for (uint32_t i = begin; i < end; i++) {
