@@ -12,6 +12,7 @@
  * cancel_seen at the end, so a build some poll gave up in (csg_bounds
  * returns an empty box then) is never used.
  */
+#include <assert.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -133,6 +134,23 @@ struct refbuf {
 	uint32_t n, cap;
 };
 
+/* Room for n references (n < ACCEL_MAX_REFS). */
+static int refbuf_reserve(struct refbuf *b, uint32_t n)
+{
+	if (n <= b->cap)
+		return 0;
+	uint32_t *nr = realloc(b->ref, (size_t)n * sizeof *nr);
+	if (!nr)
+		return -1;
+	b->ref = nr;
+	struct geom_box *nbx = realloc(b->box, (size_t)n * sizeof *nbx);
+	if (!nbx)
+		return -1;
+	b->box = nbx;
+	b->cap = n;
+	return 0;
+}
+
 static int refbuf_push(struct refbuf *b, uint32_t ref, struct geom_box box)
 {
 	if (b->n == b->cap) {
@@ -237,6 +255,52 @@ static void float_inverse(const mat34 *inv, struct ginst *gi, mat34 *rounded)
 }
 
 /*
+ * Puts g's instance records in leaf order: first the bounded ones, record k
+ * being the one of reference all[perm[k]], then the unbounded ones in
+ * g->unb's order (their references renumbered). In place, cycle by cycle,
+ * with a 4-byte index per record (a copy of the records would hold the
+ * group's biggest array twice at the build's peak). Every record has one
+ * reference, bounded or not. Returns 0, -1 when out of memory, or
+ * ACCEL_CANCELLED when a cancel poll said true.
+ */
+static int order_instances(struct group *g, const uint32_t *all, const uint32_t *perm, uint32_t n_bounded)
+{
+	const uint32_t placed = 1u << 31; /* records number below 2^28 (ACCEL_MAX_REFS) */
+	uint32_t *src = malloc(((size_t)g->n_inst + 1) * sizeof *src); /* slot j takes record src[j] */
+	if (!src)
+		return -1;
+	for (uint32_t k = 0; k < n_bounded; k++)
+		src[k] = REF_IDX(all[perm[k]]);
+	uint32_t next = n_bounded;
+	for (uint32_t k = 0; k < g->n_unb; k++)
+		if (REF_KIND(g->unb[k]) == REF_INST) {
+			src[next] = REF_IDX(g->unb[k]);
+			g->unb[k] = REF_MAKE(REF_INST, next++);
+		}
+	assert(next == g->n_inst);
+	for (uint32_t k = 0; k < g->n_inst; k++) {
+		if (cancel_poll_every(k)) {
+			free(src);
+			return ACCEL_CANCELLED;
+		}
+		if (src[k] & placed)
+			continue;
+		struct ginst first = g->inst[k];
+		uint32_t j = k;
+		while ((src[j] & ~placed) != k) {
+			uint32_t from = src[j] & ~placed;
+			g->inst[j] = g->inst[from];
+			src[j] |= placed;
+			j = from;
+		}
+		g->inst[j] = first;
+		src[j] |= placed;
+	}
+	free(src);
+	return 0;
+}
+
+/*
  * Builds the group over objects objs[0..n). Returns NULL with err filled on
  * failure (out of memory or too many primitives).
  */
@@ -297,7 +361,10 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	g->bytes = sizeof *g + n_sph * sizeof *g->sph + n_mesh * sizeof *g->mesh + n_tri * sizeof *g->tri +
 		   n_xp * sizeof *g->xp + n_inst * sizeof *g->inst + n_bake * sizeof *g->bake;
 
-	/* pass 2: fill; bounded references go to all[]/boxes[], the rest to unb */
+	/* pass 2: fill; bounded references go to all[]/boxes[], the rest to unb
+	 * (room for one each; only split triangles make more) */
+	if (refbuf_reserve(&rb, (uint32_t)n_all) < 0)
+		goto oom;
 	uint32_t n_unb = 0;
 	uint32_t *unb = malloc((n_all ? n_all : 1) * sizeof *unb);
 	if (!unb)
@@ -518,24 +585,11 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 		g->bounds = geom_box_union(g->bounds, boxes[k]);
 	}
 	if (inst_only) { /* bounded instances in leaf order, then the unbounded ones */
-		struct ginst *ord = malloc((size_t)g->n_inst * sizeof *ord);
-		if (!ord)
+		int orc = order_instances(g, all, perm, n_bounded);
+		if (orc == ACCEL_CANCELLED)
+			goto cancelled;
+		if (orc < 0)
 			goto oom;
-		for (uint32_t k = 0; k < n_bounded; k++) {
-			if (cancel_poll_every(k)) {
-				free(ord);
-				goto cancelled;
-			}
-			ord[k] = g->inst[REF_IDX(all[perm[k]])];
-		}
-		uint32_t next = n_bounded;
-		for (uint32_t k = 0; k < g->n_unb; k++)
-			if (REF_KIND(g->unb[k]) == REF_INST) {
-				ord[next] = g->inst[REF_IDX(g->unb[k])];
-				g->unb[k] = REF_MAKE(REF_INST, next++);
-			}
-		free(g->inst);
-		g->inst = ord;
 	} else {
 		for (uint32_t k = 0; k < n_bounded; k++) {
 			if (cancel_poll_every(k))

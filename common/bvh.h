@@ -63,5 +63,12 @@ int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t 
 int bvh_build_ex(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf,
 		 bool pack);
 void bvh_free(struct bvh *b);
+/*
+ * How many threads a build may use (the calling one included): 0, the
+ * default, means one per online processor (at most 8). Builds of fewer
+ * than 8192 items use one. The tree is the same whatever the count.
+ * Process-wide; set it before building (a render's -j).
+ */
+void bvh_set_threads(unsigned n);
 
 #endif

@@ -8,9 +8,14 @@
  *     output has the smallest sum of absolute values (bytes read as signed),
  *     the heuristic the PNG specification recommends for true-colour images
  *     (16-bit rows are filtered as bytes too, a pixel being 6 of them).
+ *   - Rows are filtered in bands and the filtered bytes deflated in pieces of
+ *     PNG_PIECE bytes, each piece on its own (no match reaches back into the
+ *     piece before; its blocks follow the last one of that piece), on as
+ *     many threads as img_set_threads allows: the pieces are fixed, so the
+ *     bytes are the same whatever the number of threads.
  *   - Deflate (RFC 1951): LZ77 over a 32 KiB window with hash chains on three
- *     bytes and one-step lazy matching (parameters close to zlib's level 6:
- *     chains of up to 128, 32 when a good match is in hand, stop at 128).
+ *     bytes and one-step lazy matching (parameters between zlib's levels 5
+ *     and 6: chains of up to 32, 8 when a good match is in hand, stop at 64).
  *     Symbols are gathered into blocks of up to 16 Ki symbols; each block is
  *     written as dynamic Huffman, fixed Huffman or stored, whichever is
  *     smallest. Huffman code lengths are limited (15, and 7 for the code-length
@@ -30,6 +35,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -112,6 +118,7 @@ struct obuf {
 	int oom;
 	uint64_t bits; /* pending bits, LSB first */
 	int nbits;
+	int has_stored; /* a stored block was written (it pads to this buffer's bytes) */
 };
 
 static void ob_reserve(struct obuf *o, size_t more)
@@ -181,6 +188,34 @@ static void ob_flush_bits(struct obuf *o)
 	}
 	o->bits = 0;
 	o->nbits = 0;
+}
+
+/*
+ * Appends src's bits (its bytes, then its pending bits) to o's, src being
+ * a piece of one deflate stream. A piece with a stored block must start on
+ * a byte (the block's padding reaches src's byte boundary): an empty
+ * stored block (BFINAL 0, BTYPE 00, padding, LEN 0, NLEN 0xffff) first
+ * takes o to one.
+ */
+static void ob_append_bits(struct obuf *o, const struct obuf *src)
+{
+	if (src->has_stored && o->nbits % 8) {
+		static const uint8_t empty[4] = { 0, 0, 0xff, 0xff };
+		ob_put(o, 0, 3);
+		ob_flush_bits(o);
+		ob_bytes(o, empty, 4);
+	}
+	if (o->nbits == 0) {
+		ob_bytes(o, src->p, src->n);
+	} else if (o->nbits % 8 == 0) {
+		ob_flush_bits(o);
+		ob_bytes(o, src->p, src->n);
+	} else {
+		for (size_t i = 0; i < src->n; i++)
+			ob_put(o, src->p[i], 8);
+	}
+	if (src->nbits)
+		ob_put(o, (uint32_t)src->bits, src->nbits);
 }
 
 /* ---- Huffman codes ------------------------------------------------------------ */
@@ -288,9 +323,11 @@ static void huff_codes(const uint8_t *len, int n, uint16_t *code)
 #define HSIZE (1 << HBITS)
 #define MIN_MATCH 3
 #define MAX_MATCH 258
-#define MAX_CHAIN 128  /* zlib level 6 */
+/* chains of 128 and NICE_LEN 128 (zlib level 6) made files 1.5-3.5% smaller
+ * in 1.6 times the instructions (docs/performance.md, round 4) */
+#define MAX_CHAIN 32
 #define GOOD_LEN 8     /* with a match this long, search a quarter of the chain */
-#define NICE_LEN 128   /* stop searching at a match this long */
+#define NICE_LEN 64    /* stop searching at a match this long */
 #define LAZY_LEN 16    /* do not look for a better match beyond this */
 #define BLOCK_SYMS 16384
 
@@ -354,8 +391,10 @@ static int longest_match(const struct deflate *z, size_t pos, int prev_len, unsi
 				uint64_t a, b;
 				memcpy(&a, t + l, 8);
 				memcpy(&b, s + l, 8);
-				if (a != b)
+				if (a != b) { /* the lowest differing byte ends the match */
+					l += __builtin_ctzll(a ^ b) >> 3;
 					break;
+				}
 				l += 8;
 			}
 #endif
@@ -498,6 +537,7 @@ static void flush_block(struct deflate *z, size_t end, int last)
 			int fin = last && pos + k == end;
 			ob_put(o, (uint32_t)fin, 3); /* BTYPE 00 */
 			ob_flush_bits(o);
+			o->has_stored = 1;
 			uint8_t h[4] = { (uint8_t)k, (uint8_t)(k >> 8), (uint8_t)~k, (uint8_t)(~k >> 8) };
 			ob_bytes(o, h, 4);
 			ob_bytes(o, z->in + pos, k);
@@ -539,10 +579,13 @@ static inline void add_sym(struct deflate *z, unsigned ll, unsigned d)
 }
 
 /*
- * Compresses in[0..n) as a raw deflate stream appended to o. Returns 0, or
- * -1 when out of memory (o->oom may also be set).
+ * Compresses in[0..n) as a raw deflate stream appended to o, matches
+ * reaching no further back than in. last: the final piece of the stream
+ * (its last block has BFINAL set); else the next piece's bits follow (its
+ * pending bits stay in o->bits). Returns 0, or -1 when out of memory
+ * (o->oom may also be set).
  */
-static int deflate_raw(const uint8_t *in, size_t n, struct obuf *o)
+static int deflate_raw(const uint8_t *in, size_t n, struct obuf *o, int last)
 {
 	struct deflate z;
 	memset(&z, 0, sizeof z);
@@ -589,7 +632,7 @@ static int deflate_raw(const uint8_t *in, size_t n, struct obuf *o)
 	}
 	if (has_prev)
 		add_sym(&z, in[n - 1], 0); /* no match can start at n-1 */
-	flush_block(&z, n, 1);
+	flush_block(&z, n, last);
 	rc = o->oom ? -1 : 0;
 done:
 	free(z.head);
@@ -655,45 +698,226 @@ static const uint8_t *png_row(struct png_rows *r, uint32_t y)
 	return o;
 }
 
-/*
- * Filters the h rows into out (h rows of 1 + rb bytes), each row with the
- * filter of least sum of |signed byte|; bpp is the bytes of one pixel (3 for
- * 8-bit RGB, 6 for 16-bit). scratch holds 5 rows of rb bytes.
- */
-static void png_filter(struct png_rows *r, uint32_t h, int bpp, uint8_t *out, uint8_t *scratch)
+/* The five filters of one row into d[0..rb) (cur: the row, up: the one
+ * above or NULL, k: bytes per pixel), each byte exactly as the PNG
+ * specification defines it; one loop per filter, so each vectorises. */
+static void filter_none(const uint8_t *cur, const uint8_t *up, size_t rb, size_t k, uint8_t *d)
 {
+	(void)up, (void)k;
+	memcpy(d, cur, rb);
+}
+
+static void filter_sub(const uint8_t *cur, const uint8_t *up, size_t rb, size_t k, uint8_t *d)
+{
+	(void)up;
+	for (size_t i = 0; i < k && i < rb; i++)
+		d[i] = cur[i];
+	for (size_t i = k; i < rb; i++)
+		d[i] = (uint8_t)(cur[i] - cur[i - k]);
+}
+
+static void filter_up(const uint8_t *cur, const uint8_t *up, size_t rb, size_t k, uint8_t *d)
+{
+	(void)k;
+	if (!up) {
+		memcpy(d, cur, rb);
+		return;
+	}
+	for (size_t i = 0; i < rb; i++)
+		d[i] = (uint8_t)(cur[i] - up[i]);
+}
+
+static void filter_avg(const uint8_t *cur, const uint8_t *up, size_t rb, size_t k, uint8_t *d)
+{
+	if (!up) {
+		for (size_t i = 0; i < k && i < rb; i++)
+			d[i] = cur[i];
+		for (size_t i = k; i < rb; i++)
+			d[i] = (uint8_t)(cur[i] - (cur[i - k] >> 1));
+		return;
+	}
+	for (size_t i = 0; i < k && i < rb; i++)
+		d[i] = (uint8_t)(cur[i] - (up[i] >> 1));
+	for (size_t i = k; i < rb; i++)
+		d[i] = (uint8_t)(cur[i] - ((cur[i - k] + up[i]) >> 1));
+}
+
+static void filter_paeth(const uint8_t *cur, const uint8_t *up, size_t rb, size_t k, uint8_t *d)
+{
+	if (!up) { /* b = c = 0: the predictor is a, as Sub */
+		filter_sub(cur, up, rb, k, d);
+		return;
+	}
+	for (size_t i = 0; i < k && i < rb; i++) /* a = c = 0: the predictor is b */
+		d[i] = (uint8_t)(cur[i] - up[i]);
+	for (size_t i = k; i < rb; i++)
+		d[i] = (uint8_t)(cur[i] - paeth(cur[i - k], up[i], up[i - k]));
+}
+
+/* Sum of the bytes of d[0..n) read as signed, in absolute value (in
+ * pieces of 65536 bytes, whose sums of at most 128 each fit 32 bits). */
+static uint64_t filter_cost(const uint8_t *d, size_t n)
+{
+	uint64_t sum = 0;
+	for (size_t at = 0; at < n; at += 65536) {
+		size_t m = n - at < 65536 ? n - at : 65536;
+		uint32_t part = 0;
+		for (size_t i = 0; i < m; i++) {
+			int v = (int8_t)d[at + i];
+			part += (uint32_t)(v < 0 ? -v : v);
+		}
+		sum += part;
+	}
+	return sum;
+}
+
+/*
+ * Filters rows [y0, y1) into out (row y at out + y * (1 + rb)), each row
+ * with the filter of least sum of |signed byte|; bpp is the bytes of one
+ * pixel (3 for 8-bit RGB, 6 for 16-bit). scratch holds 5 rows of rb bytes.
+ * A row's choice and bytes depend on it and the row above only, so any
+ * split of the rows gives the same bytes.
+ */
+static void png_filter(struct png_rows *r, uint32_t y0, uint32_t y1, int bpp, uint8_t *out, uint8_t *scratch)
+{
+	static void (*const filt[5])(const uint8_t *, const uint8_t *, size_t, size_t, uint8_t *) = {
+		filter_none, filter_sub, filter_up, filter_avg, filter_paeth
+	};
 	size_t rb = r->rb, k = (size_t)bpp;
-	const uint8_t *up = NULL;
-	for (uint32_t y = 0; y < h; y++) {
+	const uint8_t *up = y0 > 0 ? png_row(r, y0 - 1) : NULL;
+	for (uint32_t y = y0; y < y1; y++) {
 		const uint8_t *cur = png_row(r, y);
 		uint64_t best_sum = UINT64_MAX;
 		int best = 0;
 		for (int f = 0; f < 5; f++) {
 			uint8_t *d = scratch + (size_t)f * rb;
-			uint64_t sum = 0;
-			for (size_t i = 0; i < rb; i++) {
-				uint8_t a = i >= k ? cur[i - k] : 0, b = up ? up[i] : 0;
-				uint8_t c = i >= k && up ? up[i - k] : 0, v;
-				switch (f) {
-				case 0: v = cur[i]; break;
-				case 1: v = (uint8_t)(cur[i] - a); break;
-				case 2: v = (uint8_t)(cur[i] - b); break;
-				case 3: v = (uint8_t)(cur[i] - ((a + b) >> 1)); break;
-				default: v = (uint8_t)(cur[i] - paeth(a, b, c)); break;
-				}
-				d[i] = v;
-				sum += v < 128 ? v : 256 - v;
-			}
+			filt[f](cur, up, rb, k, d);
+			uint64_t sum = filter_cost(d, rb);
 			if (sum < best_sum) {
 				best_sum = sum;
 				best = f;
 			}
 		}
-		uint8_t *o = out + y * (rb + 1);
+		uint8_t *o = out + (size_t)y * (rb + 1);
 		o[0] = (uint8_t)best;
 		memcpy(o + 1, scratch + (size_t)best * rb, rb);
 		up = cur;
 	}
+}
+
+/* ---- the encoder's threads ----------------------------------------------------- */
+
+/* Filtered bytes per independent deflate piece: the pieces, and so the
+ * bytes of a PNG, are the same whatever the number of threads. Large
+ * enough that the window lost at each piece's start costs little (well
+ * under 1% of the size), small enough that the pieces of a 1280x960
+ * image (3.7 MB) keep two threads busy. */
+#define PNG_PIECE (256u * 1024u)
+/* Rows filtered as one task. */
+#define PNG_BAND 32u
+/* Most threads an encode uses. */
+#define PNG_MAX_THREADS 8u
+
+static atomic_uint png_threads; /* 0: one per online processor */
+
+void img_set_threads(unsigned n) { atomic_store(&png_threads, n); }
+
+/* n_tasks calls of fn(arg, task), spread over up to as many threads as
+ * img_set_threads allows (the calling one included), in any order. */
+struct par {
+	void (*fn)(void *, size_t);
+	void *arg;
+	size_t n_tasks;
+	atomic_size_t next;
+};
+
+static void *par_thread(void *arg)
+{
+	struct par *P = arg;
+	for (size_t t; (t = atomic_fetch_add(&P->next, 1)) < P->n_tasks;)
+		P->fn(P->arg, t);
+	return NULL;
+}
+
+static void par_run(void (*fn)(void *, size_t), void *arg, size_t n_tasks)
+{
+	unsigned n = atomic_load(&png_threads);
+	if (n == 0) {
+		long c = sysconf(_SC_NPROCESSORS_ONLN);
+		n = c > 0 ? (unsigned)c : 1;
+	}
+	if (n > PNG_MAX_THREADS)
+		n = PNG_MAX_THREADS;
+	if (n > n_tasks)
+		n = (unsigned)n_tasks;
+	struct par P = { fn, arg, n_tasks, 0 };
+	pthread_t th[PNG_MAX_THREADS];
+	unsigned started = 0;
+	for (unsigned k = 1; k < n; k++)
+		if (pthread_create(&th[started], NULL, par_thread, &P) == 0)
+			started++;
+	par_thread(&P);
+	for (unsigned k = 0; k < started; k++)
+		pthread_join(th[k], NULL);
+}
+
+/* Filtering bands of rows, each with its own row buffers and scratch. */
+struct filter_job {
+	const struct img_desc *d;
+	int depth16, bpp;
+	size_t rb;
+	uint32_t h;
+	uint8_t *out;
+	atomic_int oom;
+};
+
+static void filter_task(void *arg, size_t t)
+{
+	struct filter_job *J = arg;
+	uint32_t y0 = (uint32_t)t * PNG_BAND, y1 = J->h - y0 < PNG_BAND ? J->h : y0 + PNG_BAND;
+	struct png_rows rows = { .d = J->d, .depth16 = J->depth16, .rb = J->rb };
+	uint8_t *scratch = malloc(5 * J->rb);
+	if (J->depth16 || J->d->type != IMG_RGB8) {
+		rows.buf[0] = malloc(J->rb);
+		rows.buf[1] = malloc(J->rb);
+	}
+	if (scratch && (!(J->depth16 || J->d->type != IMG_RGB8) || (rows.buf[0] && rows.buf[1])))
+		png_filter(&rows, y0, y1, J->bpp, J->out, scratch);
+	else
+		atomic_store(&J->oom, 1);
+	free(scratch);
+	free(rows.buf[0]);
+	free(rows.buf[1]);
+}
+
+/* Deflating pieces of PNG_PIECE bytes, each into its own buffer. */
+struct deflate_job {
+	const uint8_t *in;
+	size_t n, n_pieces;
+	struct obuf *piece;
+	uint32_t *adler;
+};
+
+static void deflate_task(void *arg, size_t t)
+{
+	struct deflate_job *J = arg;
+	size_t off = t * PNG_PIECE, len = J->n - off < PNG_PIECE ? J->n - off : PNG_PIECE;
+	ob_reserve(&J->piece[t], len / 4 + 1024);
+	if (deflate_raw(J->in + off, len, &J->piece[t], t + 1 == J->n_pieces) < 0)
+		J->piece[t].oom = 1;
+	J->adler[t] = img_adler32(1, J->in + off, len);
+}
+
+/* The Adler-32 of a then b, from theirs and b's length (a's sums carry
+ * into b's: each of b's n bytes adds a's byte sum once more to b's
+ * second sum). */
+static uint32_t adler_cat(uint32_t a, uint32_t b, size_t n)
+{
+	const uint64_t M = 65521;
+	uint64_t a1 = a & 0xffff, b1 = a >> 16, a2 = b & 0xffff, b2 = b >> 16;
+	uint64_t s1 = (a1 + a2 + M - 1) % M;
+	uint64_t s2 = (b1 + b2 + (n % M) * ((a1 + M - 1) % M)) % M;
+	return (uint32_t)(s2 << 16 | s1);
 }
 
 static void png_chunk(struct obuf *o, const char *type, const uint8_t *data, size_t n)
@@ -764,31 +988,51 @@ static int png_encode(const struct img_desc *d, int plain, uint8_t **out, size_t
 	pthread_once(&tables_once, tables_init);
 	uint32_t w = d->w, h = d->h;
 	int depth16 = d->format == IMG_PNG16, bpp = depth16 ? 6 : 3;
-	struct png_rows rows = { .d = d, .depth16 = depth16, .rb = (size_t)bpp * w };
-	size_t rb = rows.rb, raw_n = (rb + 1) * h;
-	uint8_t *filtered = malloc(raw_n), *scratch = malloc(5 * rb);
-	struct obuf zs = { 0 }, png = { 0 };
-	if (!filtered || !scratch)
+	size_t rb = (size_t)bpp * w, raw_n = (rb + 1) * h;
+	uint8_t *filtered = malloc(raw_n);
+	struct obuf zs = { 0 }, png = { 0 }, *piece = NULL;
+	uint32_t *adler = NULL;
+	size_t n_pieces = (raw_n + PNG_PIECE - 1) / PNG_PIECE;
+	if (!filtered)
 		goto oom;
-	if (depth16 || d->type != IMG_RGB8) {
-		rows.buf[0] = malloc(rb);
-		rows.buf[1] = malloc(rb);
-		if (!rows.buf[0] || !rows.buf[1])
-			goto oom;
-	}
-	png_filter(&rows, h, bpp, filtered, scratch);
-	free(scratch);
-	scratch = NULL;
+	struct filter_job fj = { .d = d, .depth16 = depth16, .bpp = bpp, .rb = rb, .h = h, .out = filtered };
+	atomic_init(&fj.oom, 0);
+	par_run(filter_task, &fj, (h + PNG_BAND - 1) / PNG_BAND);
+	if (atomic_load(&fj.oom))
+		goto oom;
 
 	/* zlib stream: CMF 0x78 (deflate, 32K window), FLG 0x9C (default level,
-	 * (CMF*256 + FLG) % 31 == 0), deflate data, Adler-32 big-endian */
-	ob_reserve(&zs, raw_n / 4 + 1024);
+	 * (CMF*256 + FLG) % 31 == 0), deflate data, Adler-32 big-endian. The
+	 * deflate data is the pieces' streams one after the other. */
+	piece = calloc(n_pieces, sizeof *piece);
+	adler = malloc(n_pieces * sizeof *adler);
+	if (!piece || !adler)
+		goto oom;
+	struct deflate_job dj = { filtered, raw_n, n_pieces, piece, adler };
+	par_run(deflate_task, &dj, n_pieces);
+	size_t zn = 0;
+	for (size_t t = 0; t < n_pieces; t++) {
+		if (piece[t].oom)
+			goto oom;
+		zn += piece[t].n;
+	}
+	ob_reserve(&zs, zn + 6);
 	uint8_t zh[2] = { 0x78, 0x9C };
 	ob_bytes(&zs, zh, 2);
-	if (deflate_raw(filtered, raw_n, &zs) < 0)
-		goto oom;
+	uint32_t ad = 1;
+	for (size_t t = 0; t < n_pieces; t++) {
+		ob_append_bits(&zs, &piece[t]);
+		size_t len = raw_n - t * PNG_PIECE < PNG_PIECE ? raw_n - t * PNG_PIECE : PNG_PIECE;
+		ad = adler_cat(ad, adler[t], len);
+		free(piece[t].p);
+		piece[t].p = NULL;
+	}
 	ob_flush_bits(&zs);
-	ob_be32(&zs, img_adler32(1, filtered, raw_n));
+	ob_be32(&zs, ad);
+	free(piece);
+	piece = NULL;
+	free(adler);
+	adler = NULL;
 	free(filtered);
 	filtered = NULL;
 	if (zs.oom)
@@ -813,16 +1057,16 @@ static int png_encode(const struct img_desc *d, int plain, uint8_t **out, size_t
 	zs.p = NULL;
 	if (png.oom)
 		goto oom;
-	free(rows.buf[0]);
-	free(rows.buf[1]);
 	*out = png.p;
 	*out_len = png.n;
 	return 0;
 oom:
 	free(filtered);
-	free(scratch);
-	free(rows.buf[0]);
-	free(rows.buf[1]);
+	if (piece)
+		for (size_t t = 0; t < n_pieces; t++)
+			free(piece[t].p);
+	free(piece);
+	free(adler);
 	free(zs.p);
 	free(png.p);
 	errno = ENOMEM;

@@ -22,6 +22,13 @@ int img_png_encode(const uint8_t *rgb, uint32_t w, uint32_t h, uint8_t **out, si
  */
 int img_write(const char *path, const uint8_t *rgb, uint32_t w, uint32_t h);
 
+/*
+ * How many threads a PNG encode may use (the calling one included): 0, the
+ * default, means one per online processor (at most 8). The bytes are the
+ * same whatever the count. Process-wide.
+ */
+void img_set_threads(unsigned n);
+
 /* CRC-32 (PNG/zlib polynomial) and Adler-32, exported for tests. */
 uint32_t img_adler32(uint32_t adler, const uint8_t *p, size_t n);
 
