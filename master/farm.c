@@ -26,6 +26,7 @@
 
 #include "master/farm_int.h"
 #include "master/interrupt.h"
+#include "master/journal.h"
 #include "proto/net.h"
 #include "proto/serial.h"
 
@@ -401,7 +402,7 @@ static uint64_t mix64(uint64_t x)
 
 int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_len, double build_s,
 		const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, atomic_int *cancel,
-		uint32_t *finished)
+		uint32_t *finished, struct journal *jn)
 {
 	struct farm f;
 	memset(&f, 0, sizeof f);
@@ -476,6 +477,9 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	L = (struct local){ .f = &f, .r = r, .audit_only = o->no_local };
 	atomic_init(&L.oom, 0);
 	struct tile_source src = { local_take, local_done, &L };
+	/* the journal's tiles are done before anything is taken (after the other observers: they see them) */
+	if (jn && journal_attach(jn, &f) < 0)
+		goto out;
 	for (uint32_t i = 0; i < f.n_w; i++)
 		worker_start(&f.w[i]);
 	if (n_threads > 0 && !(pool = tile_pool_start(n_threads, &src))) {
@@ -512,6 +516,7 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 		rc = ERRLEVEL_FATAL;
 
 out:
+	journal_detach(jn);
 	interrupt_on_cancel(NULL, NULL);
 	if (f.loop)
 		stop_accepting(&f);

@@ -11,6 +11,8 @@
 #include "common/scene.h"
 #include "master/master.h"
 
+struct journal;
+
 /*
  * Renders the encoded scene (scene_len bytes, proto_scene_encode) at w x h
  * into image (w*h*3 bytes, RGB8, rows top to bottom) on the workers named in
@@ -32,10 +34,12 @@
  * o->quiet. Returns 0 on success, ERRLEVEL_LEVEL2 when the local threads
  * found no memory for their tiles (what was done is in image), or an exit code (EXIT_NO_WORKERS when
  * --no-local and every worker is lost, EXIT_USAGE for a bad worker list or
- * secret file) after printing a message on stderr.
+ * secret file) after printing a message on stderr. jn (may be NULL): the
+ * journal (master/journal.h): its tiles are taken as done before anything
+ * is traced, and what is stored from then on is checkpointed into it.
  */
 int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_len, double build_s,
 		const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, atomic_int *cancel,
-		uint32_t *finished);
+		uint32_t *finished, struct journal *jn);
 
 #endif

@@ -9,6 +9,7 @@
 
 #include "common/img.h"
 #include "common/tiles.h"
+#include "master/journal.h"
 #include "master/master.h"
 #include "proto/net.h"
 
@@ -44,13 +45,20 @@ static void usage(FILE *f)
 		"                           in a handshake step or scene transfer (default 10)\n"
 		"      --audit F            re-render fraction F (0..1) of worker tiles here to check\n"
 		"                           them (default 0.03; 0: no audits; see docs/protocol.md)\n"
+		"      --resume             continue the render from the journal OUT.journal, tracing\n"
+		"                           only the tiles it lacks (none there: render from the start)\n"
+		"      --checkpoint S       write the journal every S seconds (default %g; 0: only when\n"
+		"                           the render stops: q, Esc, SIGINT, SIGTERM, SIGHUP)\n"
+		"      --keep-journal       keep OUT.journal after the render finished\n"
 		"  -h, --help               show this help\n"
 		"  -V, --version            show the version\n"
 		"\n"
 		"Exit status: 0 success; 1 and 2 the PortRAY manual's error levels (Appendix B);\n"
-		"64 usage (an unknown output extension too); 69 no worker left with --no-local; 74 output\n"
-		"not written (a missing or read-only directory is found before rendering).\n",
-		TILE_DEFAULT);
+		"64 usage (an unknown output extension too); 65 --resume refused: the journal is\n"
+		"another render's or damaged; 69 no worker left with --no-local; 74 output\n"
+		"not written (a missing or read-only directory is found before rendering); 130, 143,\n"
+		"129: stopped by SIGINT, SIGTERM, SIGHUP (the finished part and journal written).\n",
+		TILE_DEFAULT, JOURNAL_INTERVAL_DEFAULT);
 }
 
 static int parse_uint(const char *s, unsigned long max, unsigned long *out)
@@ -65,7 +73,8 @@ static int parse_uint(const char *s, unsigned long max, unsigned long *out)
 }
 
 enum { OPT_CHECK = 256, OPT_TILE, OPT_SIZE, OPT_WFILE, OPT_SECRET, OPT_NOLOCAL, OPT_HB, OPT_AUDIT, OPT_ACCEPT,
-       OPT_PORTFILE, OPT_INSECURE, OPT_FORMAT, OPT_NO_RTIME, OPT_RTIME };
+       OPT_PORTFILE, OPT_INSECURE, OPT_FORMAT, OPT_NO_RTIME, OPT_RTIME,
+       OPT_RESUME, OPT_CHECKPOINT, OPT_KEEP_JOURNAL };
 
 int main(int argc, char **argv)
 {
@@ -89,11 +98,15 @@ int main(int argc, char **argv)
 		{ "format", required_argument, NULL, OPT_FORMAT },
 		{ "no-render-time", no_argument, NULL, OPT_NO_RTIME },
 		{ "render-time", no_argument, NULL, OPT_RTIME },
+		{ "resume", no_argument, NULL, OPT_RESUME },
+		{ "checkpoint", required_argument, NULL, OPT_CHECKPOINT },
+		{ "keep-journal", no_argument, NULL, OPT_KEEP_JOURNAL },
 		{ "help", no_argument, NULL, 'h' },
 		{ "version", no_argument, NULL, 'V' },
 		{ NULL, 0, NULL, 0 },
 	};
 	struct master_opts o = { .no_render_time = true, .tile = 0 /* TILE_DEFAULT */, .heartbeat_s = 10.0, .audit = MASTER_AUDIT_DEFAULT };
+	o.checkpoint_s = JOURNAL_INTERVAL_DEFAULT;
 	unsigned long v;
 	int c;
 	while ((c = getopt_long(argc, argv, "c:o:j:qw:hV", longopts, NULL)) != -1) {
@@ -161,6 +174,17 @@ int main(int argc, char **argv)
 			o.audit = strtod(optarg, &end);
 			if (end == optarg || *end || !(o.audit >= 0 && o.audit <= 1)) {
 				fprintf(stderr, "portray-master: --audit wants a fraction 0..1, not '%s'\n", optarg);
+				return EXIT_USAGE;
+			}
+			break;
+		}
+		case OPT_RESUME: o.resume = true; break;
+		case OPT_KEEP_JOURNAL: o.keep_journal = true; break;
+		case OPT_CHECKPOINT: {
+			char *end;
+			o.checkpoint_s = strtod(optarg, &end);
+			if (end == optarg || *end || !(o.checkpoint_s >= 0 && o.checkpoint_s <= 86400)) {
+				fprintf(stderr, "portray-master: --checkpoint wants seconds 0..86400, not '%s'\n", optarg);
 				return EXIT_USAGE;
 			}
 			break;

@@ -5,6 +5,7 @@
  */
 #include <errno.h>
 #include <limits.h>
+#include <signal.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,10 +17,13 @@
 #include "common/img.h"
 #include "common/parse.h"
 #include "common/render.h"
+#include "common/tiles.h"
 #include "master/farm.h"
 #include "master/interrupt.h"
+#include "master/journal.h"
 #include "master/master.h"
 #include "master/progress.h"
+#include "proto/proto.h"
 #include "proto/serial.h"
 
 /*
@@ -150,6 +154,18 @@ static size_t output_texts(const struct master_opts *o, double seconds, const ch
 	return n;
 }
 
+/* How the render was stopped, for messages. */
+static const char *stop_word(void)
+{
+	if (interrupt_reason() == INTERRUPT_KEY)
+		return "stopped";
+	switch (interrupt_signal()) {
+	case SIGTERM: return "terminated";
+	case SIGHUP: return "hung up";
+	default: return "interrupted";
+	}
+}
+
 int master_render(const struct master_opts *o)
 {
 	struct scene *s = NULL, *ds = NULL;
@@ -162,6 +178,8 @@ int master_render(const struct master_opts *o)
 	memset(&err, 0, sizeof err);
 	int rc;
 	bool watching = false;
+	struct journal *jn = NULL;
+	bool written = false; /* the whole image is written: the journal can go */
 	double t0 = progress_now();
 	const char *out;
 	enum img_format fmt;
@@ -214,12 +232,22 @@ int master_render(const struct master_opts *o)
 	renderer_size(r, &w, &h);
 	double t_build = progress_now();
 
-	image = calloc((size_t)w * h, 3); /* unfinished pixels stay black */
+	const uint32_t bpp = 3; /* IMG_RGB8 */
+	image = calloc((size_t)w * h, bpp); /* unfinished pixels stay black */
 	if (!image) {
 		fprintf(stderr, "portray-master: out of memory for a %ux%u image\n", w, h);
 		rc = ERRLEVEL_FATAL;
 		goto done;
 	}
+	/* the journal: everything that changes a pixel must be in its parameters */
+	struct tiling tg;
+	tiling_init(&tg, w, h, o->tile);
+	struct journal_params jp = { .width = w, .height = h, .tile = tg.side, .pixel_rev = RENDER_PIXEL_REV,
+				     .pixel_type = IMG_RGB8, .bpp = bpp };
+	proto_scene_hash(enc, enc_len, jp.scene_hash);
+	rc = journal_for_render(o, out, &jp, &jn);
+	if (rc)
+		goto done;
 
 	atomic_int cancel;
 	atomic_init(&cancel, 0);
@@ -230,16 +258,24 @@ int master_render(const struct master_opts *o)
 	int threads = o->threads > 0 ? o->threads : render_ncpus();
 	bool farm = o->workers || o->workers_file || o->accept;
 	/* one loop for every render: without workers it drives the local threads alone */
-	rc = farm_render(o, enc, enc_len, t_build - t_parse, r, w, h, image, &cancel, &finished);
+	rc = farm_render(o, enc, enc_len, t_build - t_parse, r, w, h, image, &cancel, &finished, jn);
 	if (rc && rc != ERRLEVEL_LEVEL2 && !atomic_load(&cancel))
 		goto done; /* farm_render said why */
 	rc = 0;
 	double t_render = progress_now();
 	bool partial = finished < total;
+	if (jn && journal_loaded(jn) && !o->quiet)
+		fprintf(stderr, "portray-master: resumed: %u tiles from the journal, %u traced, %llu in all\n",
+			journal_preloaded(jn), finished - journal_preloaded(jn), (unsigned long long)total);
+	bool journal_left = false;
+	if (jn && partial) { /* the journal first: it is what a resume needs */
+		journal_left = journal_close(jn, image, false, o->keep_journal);
+		jn = NULL;
+	}
 
 	char partial_why[160] = "", bufs[4][512];
 	if (partial) {
-		const char *how = interrupt_reason() == INTERRUPT_KEY ? "stopped" : "interrupted";
+		const char *how = stop_word();
 		if (!atomic_load(&cancel))
 			how = "out of memory";
 		snprintf(partial_why, sizeof partial_why, "%s, %llu of %llu tiles", how, (unsigned long long)finished,
@@ -253,6 +289,7 @@ int master_render(const struct master_opts *o)
 		rc = EXIT_IO;
 		goto done;
 	}
+	written = !partial;
 	if (partial && !atomic_load(&cancel)) {
 		/* no interrupt, yet tiles are missing: every render thread failed to get
 		 * its tile buffer. Appendix B level 2: unable to allocate heap space. */
@@ -260,11 +297,14 @@ int master_render(const struct master_opts *o)
 			"written to %s\n", (unsigned long long)finished, (unsigned long long)total, shown(out));
 		rc = ERRLEVEL_LEVEL2;
 	} else if (partial) {
-		const char *why = interrupt_reason() == INTERRUPT_KEY ? "stopped" : "interrupted";
-		fprintf(stderr, "portray-master: %s: %llu of %llu tiles (%d%%) written to %s\n", why,
+		fprintf(stderr, "portray-master: %s: %llu of %llu tiles (%d%%) written to %s\n", stop_word(),
 			(unsigned long long)finished, (unsigned long long)total, (int)(100 * finished / total),
 			shown(out));
-		rc = interrupt_reason() == INTERRUPT_SIGNAL ? EXIT_INTERRUPTED : 0;
+		if (journal_left)
+			fprintf(stderr, "portray-master: the finished tiles are in %s%s: the same command with --resume "
+				"traces only the rest\n", out, JOURNAL_SUFFIX);
+		/* 130 for SIGINT, 143 SIGTERM, 129 SIGHUP: the shell's way of telling a signal */
+		rc = interrupt_reason() == INTERRUPT_SIGNAL ? 128 + interrupt_signal() : 0;
 	} else if (!o->quiet && !farm) {
 		double tr = t_render - t_build;
 		uint64_t rays = renderer_rays(r);
@@ -276,6 +316,7 @@ int master_render(const struct master_opts *o)
 			tr > 0 ? rays / tr * 1e-6 : 0.0);
 	}
 done:
+	journal_close(jn, image, written, o->keep_journal); /* kept, with the last tiles, unless written */
 	if (watching)
 		interrupt_stop();
 	free(image);
