@@ -207,7 +207,8 @@ static int records_load(struct journal *j, int fd)
 		sha256_update(&c, head, sizeof head);
 		if (len && ((k = read_full(fd, j->tile, len)) < 0 || (size_t)k < len))
 			return k < 0 ? -1 : 0;
-		sha256_update(&c, j->tile, len);
+		if (len)
+			sha256_update(&c, j->tile, len);
 		sha256_final(&c, sum);
 		if ((k = read_full(fd, want, sizeof want)) < 0)
 			return -1;
@@ -398,7 +399,8 @@ static int record_put(struct journal *j, int fd, uint32_t kind, uint32_t id, con
 	struct sha256 c;
 	sha256_init(&c);
 	sha256_update(&c, head, sizeof head);
-	sha256_update(&c, payload, len);
+	if (len)
+		sha256_update(&c, payload, len);
 	sha256_final(&c, sum);
 	size_t need = JN_REC_HEAD + len + JN_SUM_BYTES;
 	if (j->wlen + need > JN_WBUF_BYTES && j->wlen && wflush(j, fd) < 0)
@@ -408,7 +410,8 @@ static int record_put(struct journal *j, int fd, uint32_t kind, uint32_t id, con
 		       write_full(fd, sum, JN_SUM_BYTES) < 0 ? -1 : 0;
 	}
 	memcpy(j->wbuf + j->wlen, head, sizeof head);
-	memcpy(j->wbuf + j->wlen + sizeof head, payload, len);
+	if (len)
+		memcpy(j->wbuf + j->wlen + sizeof head, payload, len);
 	memcpy(j->wbuf + j->wlen + sizeof head + len, sum, JN_SUM_BYTES);
 	j->wlen += need;
 	return 0;
