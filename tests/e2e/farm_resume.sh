@@ -8,7 +8,8 @@
 #     + one record per tile: no run traced and journalled a tile twice).
 #  2. SIGTERM and SIGHUP stop a render like SIGINT: exit 143 / 129, the
 #     partial image and the journal written; --resume completes it identically.
-#  3. A journal of another scene, size or tile side is refused (exit 65,
+#  3. A worker caught lying: the journal kept from that render is exact.
+#  4. A journal of another scene, size or tile side is refused (exit 65,
 #     before tracing: the output is not touched); a torn tail is dropped
 #     (identical image); a damaged header is refused; --resume with -o -
 #     is a usage error (64).
@@ -108,7 +109,22 @@ for sig in TERM HUP; do
 	echo "SIG$sig: $(grep 'resumed:' "$T/$sig-resume.log")"
 done
 
-# 3. refusals and damage, on quick local renders (-j 1, no workers)
+# 3. a worker caught lying (audits) during a journalled render: the kept
+# journal resumes to the exact image (undone records: test_journal)
+start_worker liar -j 1 --test-delay-ms 25 --test-fault lie
+rm -f "$OUT" "$J"
+"$BIN/portray-master" "$SCENE" -o "$OUT" --size ${W}x$H --tile $TILE --no-local --checkpoint 0.02 --keep-journal \
+	-w "127.0.0.1:$a_PORT,127.0.0.1:$liar_PORT" 2>"$T/lie.log" || fail "render with a liar failed (exit $?)"
+grep -q "returned wrong pixels" "$T/lie.log" || fail "the liar was not caught"
+cmp "$T/ref.ppm" "$OUT" || fail "image differs with a liar"
+rm -f "$OUT"
+master lie-resume.log --resume
+wait $M || fail "resume of the liar's journal failed (exit $?)"
+grep -q "resumed: $NT tiles from the journal, 0 traced" "$T/lie-resume.log" || fail "liar: $(cat "$T/lie-resume.log")"
+cmp "$T/ref.ppm" "$OUT" || fail "image resumed from the liar's journal differs"
+echo "liar: journal replayed whole"
+
+# 4. refusals and damage, on quick local renders (-j 1, no workers)
 L=$T/loc.ppm
 LJ=$L.journal
 lrender() { "$BIN/portray-master" "$@" -j 1 2>"$T/l.log"; }
