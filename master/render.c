@@ -154,6 +154,13 @@ static size_t output_texts(const struct master_opts *o, double seconds, const ch
 	return n;
 }
 
+/* The render stopped and left its journal beside out. */
+static void say_journal(const char *out)
+{
+	fprintf(stderr, "portray-master: the finished tiles are in %s%s: the same command with --resume traces only "
+		"the rest\n", out, JOURNAL_SUFFIX);
+}
+
 /* How the render was stopped, for messages. */
 static const char *stop_word(void)
 {
@@ -300,9 +307,6 @@ int master_render(const struct master_opts *o)
 		fprintf(stderr, "portray-master: %s: %llu of %llu tiles (%d%%) written to %s\n", stop_word(),
 			(unsigned long long)finished, (unsigned long long)total, (int)(100 * finished / total),
 			shown(out));
-		if (journal_left)
-			fprintf(stderr, "portray-master: the finished tiles are in %s%s: the same command with --resume "
-				"traces only the rest\n", out, JOURNAL_SUFFIX);
 		/* 130 for SIGINT, 143 SIGTERM, 129 SIGHUP: the shell's way of telling a signal */
 		rc = interrupt_reason() == INTERRUPT_SIGNAL ? 128 + interrupt_signal() : 0;
 	} else if (!o->quiet && !farm) {
@@ -315,8 +319,12 @@ int master_render(const struct master_opts *o)
 			t_render - t0, t_parse - t0, t_build - t_parse, tr, (unsigned long long)rays,
 			tr > 0 ? rays / tr * 1e-6 : 0.0);
 	}
+	if (journal_left)
+		say_journal(out);
 done:
-	journal_close(jn, image, written, o->keep_journal); /* kept, with the last tiles, unless written */
+	/* kept, with the last tiles, unless the image is written (e.g. every worker lost) */
+	if (journal_close(jn, image, written, o->keep_journal) && !written)
+		say_journal(out);
 	if (watching)
 		interrupt_stop();
 	free(image);
