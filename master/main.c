@@ -55,9 +55,9 @@ static void usage(FILE *f)
 		"\n"
 		"Exit status: 0 success; 1 and 2 the PortRAY manual's error levels (Appendix B);\n"
 		"64 usage (an unknown output extension too); 65 --resume refused: the journal is\n"
-		"another render's or damaged; 69 no worker left with --no-local; 74 output\n"
-		"not written (a missing or read-only directory is found before rendering); 130, 143,\n"
-		"129: stopped by SIGINT, SIGTERM, SIGHUP (the finished part and journal written).\n",
+		"another render's or damaged; 69 no worker left with --no-local; 74 output not\n"
+		"written (a missing or read-only directory is found before rendering); 130, 143,\n"
+		"129 stopped by SIGINT, SIGTERM, SIGHUP (the finished part and journal written).\n",
 		TILE_DEFAULT, JOURNAL_INTERVAL_DEFAULT);
 }
 
