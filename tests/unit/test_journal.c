@@ -2,9 +2,10 @@
  * test_journal.c - the checkpoint journal (master/journal.c) alone, with no
  * render: tiles written at checkpoints and read back on resume, undone
  * tiles, the refusal of another render's journal (scene, size, tile side,
- * pixel revision and type), a damaged header, a journal cut at every byte
- * (only whole records survive, each with its own pixels, and the torn tail
- * is cut off the file so appends follow), a flipped byte, the first
+ * pixel revision and type), a damaged header, a journal cut at each byte of
+ * its header and first records and around every record's end (only whole
+ * records survive, each with its own pixels, and the torn tail is cut off
+ * the file so appends follow), a flipped byte, the first
  * checkpoint's rename (no file before it, no temporary file after), and the
  * end of a render (removed when finished, kept with the last tiles when not).
  */
@@ -260,7 +261,7 @@ static void test_mismatch(void)
 }
 
 /*
- * The journal cut at every byte (a crash mid-append): the header survives
+ * The journal cut short (a crash mid-append): the header survives
  * whole or the journal is refused; of the records only whole ones count,
  * each with its own pixels; the torn tail is cut off, so that the next
  * checkpoint's records are read back too.
