@@ -26,6 +26,7 @@
 
 #include "master/farm_int.h"
 #include "master/interrupt.h"
+#include "master/journal.h"
 #include "proto/net.h"
 #include "proto/serial.h"
 
@@ -491,7 +492,7 @@ static uint64_t mix64(uint64_t x)
 
 int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_len, double build_s,
 		const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, enum render_pixel px,
-		atomic_int *cancel, uint32_t *finished)
+		atomic_int *cancel, uint32_t *finished, struct journal *jn)
 {
 	struct farm f;
 	memset(&f, 0, sizeof f);
@@ -579,6 +580,9 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 		rc = EXIT_TOO_FEW;
 		goto out;
 	}
+	/* the journal's tiles are done before anything is taken (after the other observers: they see them) */
+	if (jn && journal_attach(jn, &f) < 0)
+		goto out;
 	/* before the workers start: one failing at once already asks join_check */
 	f.join_deadline = f.t0 + o->join_timeout_s;
 	ev_timer_init(&f.join, on_join, &f);
@@ -620,6 +624,7 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 		rc = ERRLEVEL_FATAL;
 
 out:
+	journal_detach(jn);
 	interrupt_on_cancel(NULL, NULL);
 	if (f.loop)
 		stop_accepting(&f);

@@ -11,6 +11,8 @@
 #include "common/scene.h"
 #include "master/master.h"
 
+struct journal;
+
 /*
  * Renders the encoded scene (scene_len bytes, proto_scene_encode) at w x h
  * into image (w*h*render_pixel_bytes(px) bytes, pixels of type px as
@@ -36,10 +38,12 @@
  * found no memory for their tiles (what was done is in image), or an exit code (EXIT_TOO_FEW when
  * fewer than o->min_workers workers joined, EXIT_NO_WORKERS when
  * --no-local and every worker is lost, EXIT_USAGE for a bad worker list or
- * secret file) after printing a message on stderr.
+ * secret file) after printing a message on stderr. jn (may be NULL): the
+ * journal (master/journal.h): its tiles are taken as done before anything
+ * is traced, and what is stored from then on is checkpointed into it.
  */
 int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_len, double build_s,
 		const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, enum render_pixel px,
-		atomic_int *cancel, uint32_t *finished);
+		atomic_int *cancel, uint32_t *finished, struct journal *jn);
 
 #endif

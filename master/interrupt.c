@@ -1,5 +1,6 @@
 /*
- * interrupt.c - SIGINT and the q/Esc keys end a render early (interrupt.h).
+ * interrupt.c - SIGINT, SIGTERM, SIGHUP and the q/Esc keys end a render
+ * early (interrupt.h).
  */
 #include "master/interrupt.h"
 
@@ -24,7 +25,8 @@ static atomic_int *g_cancel;
  * on any thread: lock-free atomics (safe in handlers, C11 7.14.1.1), not
  * volatile sig_atomic_t, which only orders a handler against its own thread. */
 static atomic_int g_reason;
-static atomic_int g_sigints;
+static atomic_int g_sigints;  /* stop signals so far (SIGINT, SIGTERM, SIGHUP) */
+static atomic_int g_signo;    /* the first of them */
 static atomic_int g_raw;       /* terminal is in our mode */
 static atomic_int g_want_raw;  /* key watching is on */
 static struct termios g_saved;            /* terminal settings to restore */
@@ -35,10 +37,16 @@ static bool g_thread_on, g_active, g_atexit;
 /* Signals that end the process while the terminal may be in our mode: the
  * handler restores the terminal, then dies of the signal as before. The
  * synchronous ones (SEGV, BUS, FPE, ILL) re-fault on return with the default
- * action; the others are raised again. */
-static const int g_fatal_sigs[] = { SIGTERM, SIGHUP, SIGQUIT, SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL };
+ * action; the others are raised again. (SIGTERM and SIGHUP stop the render
+ * like SIGINT: g_stop_sigs.) */
+static const int g_fatal_sigs[] = { SIGQUIT, SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL };
 #define N_FATAL ((int)(sizeof g_fatal_sigs / sizeof g_fatal_sigs[0]))
-static struct sigaction g_old_int, g_old_fatal[N_FATAL], g_old_tstp, g_old_cont;
+/* Signals that stop the render (the finished part and the journal are
+ * written); a second one of them kills the process the usual way. */
+static const int g_stop_sigs[] = { SIGINT, SIGTERM, SIGHUP };
+#define N_STOP ((int)(sizeof g_stop_sigs / sizeof g_stop_sigs[0]))
+static struct sigaction g_old_stop[N_STOP], g_old_fatal[N_FATAL], g_old_tstp, g_old_cont;
+static bool g_stop_set[N_STOP];
 
 /* Async-signal-safe: tcsetattr is. */
 static void term_restore(void)
@@ -94,14 +102,15 @@ void interrupt_on_cancel(void (*fn)(void *), void *arg)
 	atomic_store(&g_wake, fn);
 }
 
-static void on_sigint(int sig)
+static void on_stop_signal(int sig)
 {
-	if (atomic_fetch_add(&g_sigints, 1) > 0) { /* a second Ctrl-C: die the usual way */
+	if (atomic_fetch_add(&g_sigints, 1) > 0) { /* a second one: die the usual way */
 		term_restore();
 		signal(sig, SIG_DFL);
 		raise(sig);
 		return;
 	}
+	g_signo = sig;
 	g_reason = INTERRUPT_SIGNAL;
 	if (g_cancel)
 		atomic_store(g_cancel, 1);
@@ -214,13 +223,21 @@ int interrupt_start(atomic_int *cancel, bool keys)
 	g_cancel = cancel;
 	g_reason = INTERRUPT_NONE;
 	g_sigints = 0;
+	g_signo = 0;
 	atomic_store(&g_stop, 0);
 
 	struct sigaction sa;
 	memset(&sa, 0, sizeof sa);
 	sigemptyset(&sa.sa_mask);
-	sa.sa_handler = on_sigint;
-	sigaction(SIGINT, &sa, &g_old_int);
+	sa.sa_handler = on_stop_signal;
+	for (int i = 0; i < N_STOP; i++) {
+		/* SIGTERM and SIGHUP left ignored (nohup) stay ignored; SIGINT is
+		 * always ours, as before (a shell starts `cmd &` with it ignored) */
+		g_stop_set[i] = sigaction(g_stop_sigs[i], NULL, &g_old_stop[i]) == 0 &&
+				(g_stop_sigs[i] == SIGINT || g_old_stop[i].sa_handler != SIG_IGN);
+		if (g_stop_set[i])
+			sigaction(g_stop_sigs[i], &sa, NULL);
+	}
 
 	g_want_raw = 0;
 	g_thread_on = false;
@@ -264,11 +281,18 @@ void interrupt_stop(void)
 		sigaction(SIGTSTP, &g_old_tstp, NULL);
 		sigaction(SIGCONT, &g_old_cont, NULL);
 	}
-	sigaction(SIGINT, &g_old_int, NULL);
+	for (int i = 0; i < N_STOP; i++)
+		if (g_stop_set[i])
+			sigaction(g_stop_sigs[i], &g_old_stop[i], NULL);
 	g_active = false;
 }
 
 enum interrupt_reason interrupt_reason(void)
 {
 	return (enum interrupt_reason)g_reason;
+}
+
+int interrupt_signal(void)
+{
+	return g_reason == INTERRUPT_SIGNAL ? atomic_load(&g_signo) : 0;
 }

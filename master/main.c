@@ -9,6 +9,7 @@
 
 #include "common/img.h"
 #include "common/tiles.h"
+#include "master/journal.h"
 #include "master/master.h"
 #include "master/sched.h"
 #include "proto/net.h"
@@ -56,14 +57,21 @@ static void usage(FILE *f)
 		"      --no-aa              one ray a pixel: the standard filter alone\n"
 		"      --no-shadows         no light casts shadows\n"
 		"      --no-reflections     no reflection rays\n"
+		"      --resume             continue the render from the journal OUT.journal, tracing\n"
+		"                           only the tiles it lacks (none there: render from the start)\n"
+		"      --checkpoint S       write the journal every S seconds (default %g; 0: only when\n"
+		"                           the render stops: q, Esc, SIGINT, SIGTERM, SIGHUP)\n"
+		"      --keep-journal       keep OUT.journal after the render finished\n"
 		"  -h, --help               show this help\n"
 		"  -V, --version            show the version\n"
 		"\n"
 		"Exit status: 0 success; 1 and 2 the PortRAY manual's error levels (Appendix B);\n"
-		"64 usage (an unknown output extension too); 69 no worker left with --no-local; 74 output\n"
-		"not written (a missing or read-only directory is found before rendering);\n"
-		"75 fewer workers joined than --min-workers.\n",
-		TILE_DEFAULT);
+		"64 usage (an unknown output extension too); 65 --resume refused: the journal is\n"
+		"another render's or damaged; 69 no worker left with --no-local; 74 output not\n"
+		"written (a missing or read-only directory is found before rendering); 75 fewer\n"
+		"workers joined than --min-workers; 130, 143, 129 stopped by SIGINT, SIGTERM,\n"
+		"SIGHUP (the finished part and journal written).\n",
+		TILE_DEFAULT, JOURNAL_INTERVAL_DEFAULT);
 }
 
 static int parse_uint(const char *s, unsigned long max, unsigned long *out)
@@ -80,7 +88,9 @@ static int parse_uint(const char *s, unsigned long max, unsigned long *out)
 enum { OPT_CHECK = 256, OPT_TILE, OPT_SIZE, OPT_WFILE, OPT_SECRET, OPT_NOLOCAL, OPT_HB, OPT_AUDIT, OPT_ACCEPT,
        OPT_PORTFILE, OPT_INSECURE, OPT_FORMAT, OPT_NO_RTIME, OPT_RTIME,
        /* issue 12: progress, --min-workers, preview switches */
-       OPT_PINTERVAL, OPT_MINW, OPT_JOINTO, OPT_REGION, OPT_PREVIEW, OPT_NOAA, OPT_NOSHADOWS, OPT_NOREFL };
+       OPT_PINTERVAL, OPT_MINW, OPT_JOINTO, OPT_REGION, OPT_PREVIEW, OPT_NOAA, OPT_NOSHADOWS, OPT_NOREFL,
+       /* issue 12: checkpoint and resume */
+       OPT_RESUME, OPT_CHECKPOINT, OPT_KEEP_JOURNAL };
 
 /* seconds in 0..max (zero_ok), or -1 */
 static int parse_seconds(const char *s, double max, bool zero_ok, double *out)
@@ -124,12 +134,16 @@ int main(int argc, char **argv)
 		{ "no-aa", no_argument, NULL, OPT_NOAA },
 		{ "no-shadows", no_argument, NULL, OPT_NOSHADOWS },
 		{ "no-reflections", no_argument, NULL, OPT_NOREFL },
+		{ "resume", no_argument, NULL, OPT_RESUME },
+		{ "checkpoint", required_argument, NULL, OPT_CHECKPOINT },
+		{ "keep-journal", no_argument, NULL, OPT_KEEP_JOURNAL },
 		{ "help", no_argument, NULL, 'h' },
 		{ "version", no_argument, NULL, 'V' },
 		{ NULL, 0, NULL, 0 },
 	};
 	struct master_opts o = { .no_render_time = true, .tile = 0 /* TILE_DEFAULT */, .heartbeat_s = 10.0, .audit = MASTER_AUDIT_DEFAULT,
 				  .progress_interval = -1, .join_timeout_s = MASTER_JOIN_TIMEOUT_DEFAULT };
+	o.checkpoint_s = JOURNAL_INTERVAL_DEFAULT;
 	unsigned long v;
 	int c;
 	while ((c = getopt_long(argc, argv, "c:o:j:qw:hV", longopts, NULL)) != -1) {
@@ -238,6 +252,17 @@ int main(int argc, char **argv)
 		case OPT_NOAA: o.no_aa = true; break;
 		case OPT_NOSHADOWS: o.no_shadows = true; break;
 		case OPT_NOREFL: o.no_reflections = true; break;
+		case OPT_RESUME: o.resume = true; break;
+		case OPT_KEEP_JOURNAL: o.keep_journal = true; break;
+		case OPT_CHECKPOINT: {
+			char *end;
+			o.checkpoint_s = strtod(optarg, &end);
+			if (end == optarg || *end || !(o.checkpoint_s >= 0 && o.checkpoint_s <= 86400)) {
+				fprintf(stderr, "portray-master: --checkpoint wants seconds 0..86400, not '%s'\n", optarg);
+				return EXIT_USAGE;
+			}
+			break;
+		}
 		case 'h': usage(stdout); return 0;
 		case 'V': printf("portray-master %s (PortRAY 0.11 scene language)\n", PORTRAY_VERSION); return 0;
 		default: usage(stderr); return EXIT_USAGE;

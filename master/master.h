@@ -13,7 +13,8 @@ enum {
 	EXIT_IO = 74,         /* could not write the output image (EX_IOERR) */
 	EXIT_NO_WORKERS = 69, /* --no-local and every worker lost (EX_UNAVAILABLE) */
 	EXIT_TOO_FEW = 75,    /* --min-workers: fewer workers joined (EX_TEMPFAIL: try again later) */
-	EXIT_INTERRUPTED = 130 /* never used for a finished partial render */
+	EXIT_INTERRUPTED = 130, /* never used for a finished partial render; SIGTERM 143, SIGHUP 129 (128 + signal) */
+	EXIT_JOURNAL = 65     /* --resume: the journal is another render's or damaged (EX_DATAERR) */
 };
 
 /* default --audit: about 3 tiles in 100 re-rendered locally (plus each
@@ -54,6 +55,11 @@ struct master_opts {
 	bool no_aa;            /* --no-aa (--preview): the standard filter alone */
 	bool no_shadows;       /* --no-shadows (--preview): no light casts shadows */
 	bool no_reflections;   /* --no-reflections (--preview): no reflection rays */
+	/* checkpoint and resume (master/journal.h) */
+	bool resume;           /* --resume: continue from OUT.journal */
+	double checkpoint_s;   /* --checkpoint S: seconds between checkpoints, 0 = only when the render stops;
+				* main sets JOURNAL_INTERVAL_DEFAULT */
+	bool keep_journal;     /* --keep-journal: keep OUT.journal after a finished render */
 };
 
 struct scene_camera;

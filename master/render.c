@@ -5,6 +5,7 @@
  */
 #include <errno.h>
 #include <limits.h>
+#include <signal.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,8 +20,10 @@
 #include "common/tiles.h"
 #include "master/farm.h"
 #include "master/interrupt.h"
+#include "master/journal.h"
 #include "master/master.h"
 #include "master/progress.h"
+#include "proto/proto.h"
 #include "proto/serial.h"
 
 /*
@@ -178,6 +181,25 @@ static void floats_to_host(uint8_t *p, size_t n_floats)
 	}
 }
 
+/* The render stopped and left its journal beside out. */
+static void say_journal(const char *out)
+{
+	fprintf(stderr, "portray-master: the finished tiles are in %s%s: the same command with --resume traces only "
+		"the rest\n", out, JOURNAL_SUFFIX);
+}
+
+/* How the render was stopped, for messages. */
+static const char *stop_word(void)
+{
+	if (interrupt_reason() == INTERRUPT_KEY)
+		return "stopped";
+	switch (interrupt_signal()) {
+	case SIGTERM: return "terminated";
+	case SIGHUP: return "hung up";
+	default: return "interrupted";
+	}
+}
+
 int master_render(const struct master_opts *o)
 {
 	struct scene *s = NULL, *ds = NULL;
@@ -190,6 +212,9 @@ int master_render(const struct master_opts *o)
 	memset(&err, 0, sizeof err);
 	int rc;
 	bool watching = false;
+	bool reshaped = false; /* image no longer as assembled (host floats, cropped) */
+	struct journal *jn = NULL;
+	bool written = false; /* the whole image is written: the journal can go */
 	double t0 = progress_now();
 	const char *out;
 	enum img_format fmt;
@@ -247,50 +272,75 @@ int master_render(const struct master_opts *o)
 	double t_build = progress_now();
 
 	enum render_pixel px = pixel_for(fmt);
-	image = calloc((size_t)w * h, render_pixel_bytes(px)); /* unfinished pixels stay black (0 or 0.0f) */
+	const uint32_t bpp = (uint32_t)render_pixel_bytes(px);
+	image = calloc((size_t)w * h, bpp); /* unfinished pixels stay black (0 or 0.0f) */
 	if (!image) {
 		fprintf(stderr, "portray-master: out of memory for a %ux%u image\n", w, h);
 		rc = ERRLEVEL_FATAL;
 		goto done;
 	}
-
-	atomic_int cancel;
-	atomic_init(&cancel, 0);
-	interrupt_start(&cancel, !ds->image.nonstop);
-	watching = true;
+	/* the journal: everything that changes a pixel must be in its parameters */
 	struct tiling tg; /* as farm_render cuts it */
 	if (o->region)
 		tiling_init_region(&tg, w, h, o->tile, o->rx0, o->ry0, o->rx1, o->ry1);
 	else
 		tiling_init(&tg, w, h, o->tile);
+	struct journal_params jp = { .width = w, .height = h, .tile = tg.side, .pixel_rev = RENDER_PIXEL_REV,
+				     .pixel_type = px == RENDER_RGBF32 ? IMG_RGBF32 : IMG_RGB8, .bpp = bpp };
+	if (o->region) {
+		jp.region[0] = o->rx0;
+		jp.region[1] = o->ry0;
+		jp.region[2] = o->rx1;
+		jp.region[3] = o->ry1;
+	}
+	proto_scene_hash(enc, enc_len, jp.scene_hash);
+	rc = journal_for_render(o, out, &jp, &jn);
+	if (rc)
+		goto done;
+
+	atomic_int cancel;
+	atomic_init(&cancel, 0);
+	interrupt_start(&cancel, !ds->image.nonstop);
+	watching = true;
 	uint64_t total = tg.n;
 	uint32_t finished = 0;
 	int threads = o->threads > 0 ? o->threads : render_ncpus();
 	bool farm = o->workers || o->workers_file || o->accept;
 	/* one loop for every render: without workers it drives the local threads alone */
-	rc = farm_render(o, enc, enc_len, t_build - t_parse, r, w, h, image, px, &cancel, &finished);
+	rc = farm_render(o, enc, enc_len, t_build - t_parse, r, w, h, image, px, &cancel, &finished, jn);
 	if (rc && rc != ERRLEVEL_LEVEL2 && !atomic_load(&cancel))
 		goto done; /* farm_render said why */
 	rc = 0;
 	double t_render = progress_now();
 	bool partial = finished < total;
+	if (jn && journal_loaded(jn) && !o->quiet)
+		fprintf(stderr, "portray-master: resumed: %u tiles from the journal, %u traced, %llu in all\n",
+			journal_preloaded(jn), finished - journal_preloaded(jn), (unsigned long long)total);
+	bool journal_left = false;
+	if (jn && partial) { /* the journal first: it is what a resume needs */
+		journal_left = journal_close(jn, image, false, o->keep_journal);
+		jn = NULL;
+	}
 
 	char partial_why[160] = "", bufs[4][512];
 	if (partial) {
-		const char *how = interrupt_reason() == INTERRUPT_KEY ? "stopped" : "interrupted";
+		const char *how = stop_word();
 		if (!atomic_load(&cancel))
 			how = "out of memory";
 		snprintf(partial_why, sizeof partial_why, "%s, %llu of %llu tiles", how, (unsigned long long)finished,
 			 (unsigned long long)total);
 	}
 	struct img_text texts[4];
+	/* the journal's last tiles while the image is as assembled (the
+	 * writers want host floats and --region a cropped image) */
+	journal_sync(jn, image);
+	reshaped = px == RENDER_RGBF32 || o->region;
 	if (px == RENDER_RGBF32)
 		floats_to_host(image, (size_t)w * h * 3);
 	struct img_desc desc = { .w = w, .h = h, .type = px == RENDER_RGBF32 ? IMG_RGBF32 : IMG_RGB8,
 				 .pixels = image, .format = fmt, .text = texts };
 	if (o->region) {
 		/* a cropped file: the region's rows moved to the front, in place */
-		size_t bpp = render_pixel_bytes(px);
 		uint32_t rw = o->rx1 - o->rx0, rh = o->ry1 - o->ry0;
 		for (uint32_t y = 0; y < rh; y++)
 			memmove(image + (size_t)y * rw * bpp, image + ((size_t)(o->ry0 + y) * w + o->rx0) * bpp,
@@ -304,6 +354,7 @@ int master_render(const struct master_opts *o)
 		rc = EXIT_IO;
 		goto done;
 	}
+	written = !partial;
 	if (partial && !atomic_load(&cancel)) {
 		/* no interrupt, yet tiles are missing: every render thread failed to get
 		 * its tile buffer. Appendix B level 2: unable to allocate heap space. */
@@ -311,11 +362,11 @@ int master_render(const struct master_opts *o)
 			"written to %s\n", (unsigned long long)finished, (unsigned long long)total, shown(out));
 		rc = ERRLEVEL_LEVEL2;
 	} else if (partial) {
-		const char *why = interrupt_reason() == INTERRUPT_KEY ? "stopped" : "interrupted";
-		fprintf(stderr, "portray-master: %s: %llu of %llu tiles (%d%%) written to %s\n", why,
+		fprintf(stderr, "portray-master: %s: %llu of %llu tiles (%d%%) written to %s\n", stop_word(),
 			(unsigned long long)finished, (unsigned long long)total, (int)(100 * finished / total),
 			shown(out));
-		rc = interrupt_reason() == INTERRUPT_SIGNAL ? EXIT_INTERRUPTED : 0;
+		/* 130 for SIGINT, 143 SIGTERM, 129 SIGHUP: the shell's way of telling a signal */
+		rc = interrupt_reason() == INTERRUPT_SIGNAL ? 128 + interrupt_signal() : 0;
 	} else if (!o->quiet && !farm) {
 		double tr = t_render - t_build;
 		uint64_t rays = renderer_rays(r);
@@ -332,7 +383,12 @@ int master_render(const struct master_opts *o)
 			t_render - t0, t_parse - t0, t_build - t_parse, tr, (unsigned long long)rays,
 			tr > 0 ? rays / tr * 1e-6 : 0.0);
 	}
+	if (journal_left)
+		say_journal(out);
 done:
+	/* kept, with the last tiles, unless the image is written (e.g. every worker lost) */
+	if (journal_close(jn, reshaped ? NULL : image, written, o->keep_journal) && !written)
+		say_journal(out);
 	if (watching)
 		interrupt_stop();
 	free(image);

@@ -1,7 +1,7 @@
 #!/bin/sh
 # render_sigint.sh - SIGINT ends a render and writes the finished part: a
 # valid image, unfinished tiles black, a message saying how much is done,
-# exit 130.
+# exit 130; and the journal of the finished tiles beside it (--resume).
 . tests/cli/render_lib.inc
 slow_scene "$TMP/slow.sce" 600
 "$MASTER" "$TMP/slow.sce" -o "$TMP/part.ppm" -j 1 --tile 20 2>"$TMP/err" &
@@ -23,6 +23,8 @@ done_tiles=$(echo "$msg" | sed 's/.*interrupted: \([0-9]*\) of.*/\1/')
 if [ "$done_tiles" -gt 0 ]; then
 	[ "$(ppm_pixel "$TMP/part.ppm" 600 5 5)" != "0 0 0" ] || fail "finished pixel is black"
 fi
-# no temporary file left behind
-[ "$(ls "$TMP" | grep -c part)" -eq 1 ] || fail "leftover files: $(ls "$TMP")"
+# no temporary file left behind: the image and, with finished tiles, its journal
+want=part.ppm
+[ "$done_tiles" -gt 0 ] && want="part.ppm part.ppm.journal"
+[ "$(ls "$TMP" | grep part | tr '\n' ' ')" = "$want " ] || fail "files: $(ls "$TMP"), want $want"
 echo "render_sigint: ok ($msg)"
