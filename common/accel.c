@@ -523,8 +523,22 @@ static inline __attribute__((always_inline)) bool ref_test(const struct accel *A
 static inline bool ref_occludes(const struct accel *A, const struct group *g, uint32_t ref, struct trace *r)
 {
 	uint32_t i = REF_IDX(ref);
-	if (REF_KIND(ref) == REF_INST)
+	double t;
+	switch (REF_KIND(ref)) { /* the common kinds without a candidate */
+	case REF_SPHERE:
+		return sphere_test(&g->sph[i], r, &t);
+	case REF_TRI: {
+		const struct gmesh *m = &g->mesh[g->tri[i].mesh];
+		const uint32_t *ix = tri_ix(m, g->tri[i].tri);
+		double b1, b2;
+		return geom_tri_hit_p(trace_wray(r), &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &t,
+				      &b1, &b2);
+	}
+	case REF_INST:
 		return inst_occluded(A, &g->inst[i], r);
+	default:
+		break;
+	}
 	struct cand c;
 	cand_init(&c);
 	double tmax = r->tmax;
@@ -895,19 +909,23 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
  * in each copy, since checking leaves' sizes in the common copy cost 1.5%
  * of a whole render). */
 static inline __attribute__((always_inline)) bool group_occluded_t(const struct accel *A, const struct group *g,
-								    struct trace *r, const bool chunked)
+								    struct trace *r, const bool chunked, uint32_t *who)
 {
 	for (uint32_t k = 0; k < g->n_unb; k++) {
 		if (cancel_poll_every(k)) /* CANCELLATION, as unb_hit */
 			return false;
-		if (ref_occludes(A, g, g->unb[k], r))
+		if (ref_occludes(A, g, g->unb[k], r)) {
+			*who = g->unb[k];
 			return true;
+		}
 	}
 	if (g->bvh.root_n) {
 		if (box_hit(g->bvh.root_b, g->center, r))
 			for (uint32_t k = 0; k < g->bvh.root_n; k++)
-				if (ref_occludes(A, g, group_ref(g, g->bvh.root_idx + k), r))
+				if (ref_occludes(A, g, group_ref(g, g->bvh.root_idx + k), r)) {
+					*who = group_ref(g, g->bvh.root_idx + k);
 					return true;
+				}
 		return false;
 	}
 	if (!g->bvh.n_nodes4)
@@ -930,8 +948,10 @@ static inline __attribute__((always_inline)) bool group_occluded_t(const struct 
 				n = ACCEL_LEAF_CHUNK;
 			}
 			for (uint32_t k = 0; k < n; k++)
-				if (ref_occludes(A, g, group_ref(g, idx + k), r))
+				if (ref_occludes(A, g, group_ref(g, idx + k), r)) {
+					*who = group_ref(g, idx + k);
 					return true;
+				}
 		} else {
 			const struct bvh4 *nd = &nodes[idx];
 			float tn[4];
@@ -963,10 +983,36 @@ static inline __attribute__((always_inline)) bool group_occluded_t(const struct 
 }
 
 /* Whether anything in g is hit in (r->tmin, r->tmax): group_occluded_t in
- * the copy g's leaves need. */
+ * the copy g's leaves need; on true *who is the reference of g that was hit. */
+static bool group_occluded_who(const struct accel *A, const struct group *g, struct trace *r, uint32_t *who)
+{
+	return g->big_leaf ? group_occluded_t(A, g, r, true, who) : group_occluded_t(A, g, r, false, who);
+}
+
 static bool group_occluded(const struct accel *A, const struct group *g, struct trace *r)
 {
-	return g->big_leaf ? group_occluded_t(A, g, r, true) : group_occluded_t(A, g, r, false);
+	uint32_t who;
+	return group_occluded_who(A, g, r, &who);
+}
+
+/* Whether ref names a reference of g (kind and index in range): a hint
+ * that does may be tested, whatever accel it came from. */
+static inline bool ref_valid(const struct group *g, uint32_t ref)
+{
+	uint32_t i = REF_IDX(ref);
+	switch (REF_KIND(ref)) {
+	case REF_SPHERE: return i < g->n_sph;
+	case REF_TRI: return i < g->n_tri;
+	case REF_XPRIM: return i < g->n_xp;
+	default: return ref != ACCEL_NO_HINT && i < g->n_inst;
+	}
+}
+
+/* The last-blocker hint's test (accel_occluded_hint): true when the
+ * reference it names blocks r. */
+static inline bool hint_occludes(const struct accel *A, const struct group *g, uint32_t hint, struct trace *r)
+{
+	return hint != ACCEL_NO_HINT && ref_valid(g, hint) && ref_occludes(A, g, hint, r);
 }
 
 /* ---- packets of four rays ------------------------------------------------------------ */
@@ -1150,6 +1196,168 @@ static void group_hit4(const struct accel *A, const struct group *g, struct trac
 			finish(A, g, &tr[i], &best[i], &h[i]);
 	}
 }
+
+/*
+ * The any-hit packet traversal of g's bounded references for the rays
+ * (lanes) in *active: a subtree is visited when an active ray may hit it
+ * (children in slot order, as group_occluded_t), each stack entry keeps
+ * the lanes that met its box, and a leaf's references are each tested
+ * against those of its lanes still active. A ray leaves *active at its
+ * first blocker (*hint then names it); the walk ends when no ray is left.
+ * Every ray tests what group_occluded_t would let it test, perhaps more:
+ * anything hit blocks, so its answer is the same.
+ */
+static inline __attribute__((always_inline)) void bvh_occluded4(const struct accel *A, const struct group *g,
+								struct trace tr[4], unsigned *active, uint32_t *hint,
+								const struct ray4x *P, const uint32_t oct)
+{
+	const struct bvh4 *nodes = g->bvh.nodes;
+	const uint32_t near[3] = { 12 * (oct & 1), 4 + 12 * (oct >> 1 & 1), 8 + 12 * (oct >> 2 & 1) };
+	const uint32_t far[3] = { 12 * (~oct & 1), 4 + 12 * (~oct >> 1 & 1), 8 + 12 * (~oct >> 2 & 1) };
+	float tmn[4], tmx[4];
+	for (int i = 0; i < 4; i++) {
+		tmn[i] = box_tmin(tr[i].tmin * P->tscale[i]);
+		tmx[i] = box_tmax(tr[i].tmax * P->tscale[i]);
+	}
+	const __m128 tmin4 = _mm_loadu_ps(tmn), tmax4 = _mm_loadu_ps(tmx);
+	struct {
+		uint32_t idx, n;
+		unsigned lanes; /* the rays that met the subtree's box */
+	} stack[3 * BVH_MAX_DEPTH + 4];
+	int sp = 0;
+	unsigned act = *active, lanes = act;
+	uint32_t idx = 0, n = 0;
+	uint32_t polls = ACCEL_POLL_POPS;
+	for (;;) {
+		if (n) {
+			for (uint32_t k = 0; k < n && (lanes &= act); k++) {
+				uint32_t ref = group_ref(g, idx + k);
+				for (unsigned l = lanes; l; l &= l - 1) {
+					int i = __builtin_ctz(l);
+					if (ref_occludes(A, g, ref, &tr[i])) {
+						act &= ~(1u << i);
+						*hint = ref;
+					}
+				}
+			}
+			if (!act)
+				break;
+		} else {
+			const struct bvh4 *nd = &nodes[idx];
+			const float *b = (const float *)(const void *)nd; /* rows as in node4_hit */
+			unsigned m[4];
+			for (int c = 0; c < 4; c++) {
+				__m128 t0 = tmin4, t1 = tmax4;
+				for (int k = 0; k < 3; k++) {
+					__m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[near[k] + (uint32_t)c]), P->o[k]),
+							       P->inv_near[k]);
+					__m128 tf = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[far[k] + (uint32_t)c]), P->o[k]),
+							       P->inv_far[k]);
+					t0 = _mm_max_ps(t0, tn);
+					t1 = _mm_min_ps(t1, tf);
+				}
+				m[c] = (unsigned)_mm_movemask_ps(_mm_cmple_ps(t0, t1)) & act;
+			}
+			int first = -1;
+			for (int c = 3; c >= 0; c--) {
+				if (!m[c])
+					continue;
+				if (first >= 0) {
+					stack[sp].idx = nd->idx[first];
+					stack[sp].n = nd->n[first];
+					stack[sp++].lanes = m[first];
+				}
+				first = c;
+			}
+			if (first >= 0) {
+				idx = nd->idx[first];
+				n = nd->n[first];
+				lanes = m[first];
+				continue;
+			}
+		}
+		if (__builtin_expect(--polls == 0, 0)) { /* CANCELLATION, as bvh_hit */
+			polls = ACCEL_POLL_POPS;
+			if (cancel_poll())
+				break;
+		}
+		/* pop the next subtree some active ray meets */
+		for (;;) {
+			if (sp == 0)
+				goto out;
+			sp--;
+			if (stack[sp].lanes & act)
+				break;
+		}
+		idx = stack[sp].idx;
+		n = stack[sp].n;
+		lanes = stack[sp].lanes;
+	}
+out:
+	*active = act;
+}
+
+/* The four rays' box constants (struct ray4x) in group g's frame. */
+static void ray4x_init(struct ray4x *P, const struct trace tr[4], const struct group *g)
+{
+	float o[3][4], inv_near[3][4], inv_far[3][4];
+	for (int i = 0; i < 4; i++) {
+		struct ray_box q;
+		ray_box_init(&q, &tr[i], g->center);
+		for (int k = 0; k < 3; k++) {
+			o[k][i] = q.o[k];
+			inv_near[k][i] = q.inv_near[k];
+			inv_far[k][i] = q.inv_far[k];
+		}
+		P->tscale[i] = q.tscale;
+	}
+	for (int k = 0; k < 3; k++) {
+		P->o[k] = _mm_loadu_ps(o[k]);
+		P->inv_near[k] = _mm_loadu_ps(inv_near[k]);
+		P->inv_far[k] = _mm_loadu_ps(inv_far[k]);
+	}
+}
+
+/* accel_occluded4's packet query in g (g->bvh.n_nodes4, no big leaves) for
+ * four rays of one octant: unbounded references and the hint ray by ray,
+ * then the tree for the rays not yet blocked. */
+static void group_occluded4(const struct accel *A, const struct group *g, struct trace tr[4], uint32_t oct,
+			    bool occ[4], uint32_t *hint)
+{
+	unsigned active = 0;
+	for (int i = 0; i < 4; i++) {
+		bool blocked = false;
+		for (uint32_t k = 0; k < g->n_unb && !blocked; k++) {
+			if (cancel_poll_every(k)) /* CANCELLATION, as unb_hit */
+				break;
+			if (ref_occludes(A, g, g->unb[k], &tr[i])) {
+				blocked = true;
+				*hint = g->unb[k];
+			}
+		}
+		if (!blocked)
+			blocked = hint_occludes(A, g, *hint, &tr[i]);
+		active |= (unsigned)!blocked << i;
+	}
+	if (active) {
+		struct ray4x P;
+		ray4x_init(&P, tr, g);
+		switch (oct) { /* one copy of the loop per octant, as group_hit */
+		case 0: bvh_occluded4(A, g, tr, &active, hint, &P, 0); break;
+		case 1: bvh_occluded4(A, g, tr, &active, hint, &P, 1); break;
+		case 2: bvh_occluded4(A, g, tr, &active, hint, &P, 2); break;
+		case 3: bvh_occluded4(A, g, tr, &active, hint, &P, 3); break;
+		case 4: bvh_occluded4(A, g, tr, &active, hint, &P, 4); break;
+		case 5: bvh_occluded4(A, g, tr, &active, hint, &P, 5); break;
+		case 6: bvh_occluded4(A, g, tr, &active, hint, &P, 6); break;
+		default: bvh_occluded4(A, g, tr, &active, hint, &P, 7); break;
+		}
+	}
+	for (int i = 0; i < 4; i++)
+		occ[i] = !(active >> i & 1);
+	if (active == 15)
+		*hint = ACCEL_NO_HINT; /* as accel_occluded_hint */
+}
 #endif
 
 /* ---- public queries ----------------------------------------------------------------- */
@@ -1213,6 +1421,40 @@ bool accel_occluded(const struct accel *a, const struct ray *r)
 	struct trace t;
 	trace_init(&t, r->o, r->d, ray_tmin(r), r->tmax);
 	return group_occluded(a, a->root, &t);
+}
+
+bool accel_occluded_hint(const struct accel *a, const struct ray *r, uint32_t *hint)
+{
+	if (!a->root || !ray_ok(r))
+		return false;
+	struct trace t;
+	trace_init(&t, r->o, r->d, ray_tmin(r), r->tmax);
+	if (hint_occludes(a, a->root, *hint, &t))
+		return true;
+	if (group_occluded_who(a, a->root, &t, hint))
+		return true;
+	*hint = ACCEL_NO_HINT; /* a lit neighbour is likely lit too: no test next time */
+	return false;
+}
+
+void accel_occluded4(const struct accel *a, const struct ray r[4], bool occ[4], uint32_t *hint)
+{
+#if defined(__SSE2__)
+	const struct group *g = a->root;
+	bool packet = g && !g->bvh.root_n && g->bvh.n_nodes4 && !g->big_leaf;
+	uint32_t oct = ray_octant(r[0].d);
+	for (int i = 0; i < 4 && packet; i++)
+		packet = ray_ok(&r[i]) && ray_octant(r[i].d) == oct;
+	if (packet) {
+		struct trace tr[4];
+		for (int i = 0; i < 4; i++)
+			trace_init(&tr[i], r[i].o, r[i].d, ray_tmin(&r[i]), r[i].tmax);
+		group_occluded4(a, g, tr, oct, occ, hint);
+		return;
+	}
+#endif
+	for (int i = 0; i < 4; i++) /* rays of different octants, a root without a tree */
+		occ[i] = accel_occluded_hint(a, &r[i], hint);
 }
 
 void accel_get_stats(const struct accel *a, struct accel_stats *st) { *st = a->st; }

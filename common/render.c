@@ -132,8 +132,10 @@ static void eye_block(const struct renderer *r, const uint32_t px[4], const uint
 	struct hit h[4];
 	bool hit[4];
 	accel_intersect4(r->accel, u, h, hit);
-	for (int k = 0; k < n; k++)
-		out[k] = ok[k] ? shade_eye_hit(r->shade, &u[k], hit[k] ? &h[k] : NULL, seed[k]) : v3(0, 0, 0);
+	const struct hit *hp[4];
+	for (int k = 0; k < 4; k++)
+		hp[k] = ok[k] && hit[k] ? &h[k] : NULL; /* !ok: black, as shade_eye_hit of a miss */
+	shade_eye_hit4(r->shade, u, hp, seed, n, out);
 }
 
 /* renderer_tile_cancellable for a filter_single_ray chain, in 2x2 blocks;

@@ -12,7 +12,10 @@
  * Packets: accel_intersect4 gives every ray exactly accel_intersect's hit,
  * for four unrelated rays (mostly of different octants) and for four
  * neighbouring rays from one origin (the packet traversal), also with a
- * window (tmin > 0, finite tmax) and along an axis. The builder's depth
+ * window (tmin > 0, finite tmax) and along an axis. The occlusion queries
+ * (accel_occluded4, accel_occluded_hint, with hints carried over or made
+ * up) answer as accel_occluded for those packets and for four shadow rays
+ * toward one point (tmax 1). The builder's depth
  * limit leaves a leaf of hundreds of items (the traversals test such leaves
  * a chunk at a time: CANCELLATION in accel.c).
  */
@@ -47,6 +50,7 @@ struct job {
 	int from, to;
 	int mismatch, ties, hits;
 	int packets, packet_mismatch;
+	uint32_t hint; /* last-blocker hint carried from packet to packet */
 };
 
 /* The same hit, bit for bit (what accel_intersect4 promises). */
@@ -59,7 +63,26 @@ static bool same_hit(bool b1, const struct hit *h1, bool b2, const struct hit *h
 		       h1->object == h2->object && h1->material == h2->material);
 }
 
-/* accel_intersect4 over r[0..4) against accel_intersect, ray by ray. */
+/* accel_occluded4 and accel_occluded_hint over r[0..4) against
+ * accel_occluded, ray by ray, with the hint the job carries (whatever
+ * blocked its last rays) or, every fifth packet, an arbitrary one. */
+static void occluded_check(struct job *j, const struct ray r[4])
+{
+	bool occ[4];
+	if (j->packets % 5 == 4)
+		j->hint = (uint32_t)rng_mix((uint64_t)j->packets);
+	accel_occluded4(j->a, r, occ, &j->hint);
+	for (int i = 0; i < 4; i++) {
+		bool o1 = accel_occluded(j->a, &r[i]);
+		if (occ[i] != o1 || accel_occluded_hint(j->a, &r[i], &j->hint) != o1) {
+			j->packet_mismatch++;
+			return;
+		}
+	}
+}
+
+/* accel_intersect4 over r[0..4) against accel_intersect, ray by ray; the
+ * occlusion queries too (occluded_check). */
 static void packet_check(struct job *j, const struct ray r[4])
 {
 	struct hit h[4], h1;
@@ -73,6 +96,7 @@ static void packet_check(struct job *j, const struct ray r[4])
 			return;
 		}
 	}
+	occluded_check(j, r);
 }
 
 /* Rays [from, to): BVH, brute force and occlusion compared. */
@@ -102,6 +126,12 @@ static void *run_rays(void *arg)
 			for (int i = 0; i < 4; i++) /* axis-parallel neighbours (zero components, -0 in z) */
 				fan[i] = (struct ray){ o, v3(1e-3 * i, k % 8 < 4 ? 1 : -1, -0.0), 0.01 * i, 2 + i };
 			packet_check(j, fan);
+			for (int i = 0; i < 4; i++) { /* shadow rays: four origins toward one point (tmax 1) */
+				vec3 oi = v3_add(o, v3(1e-2 * (i & 1), 1e-2 * (i >> 1), 0));
+				vec3 to = v3_add(o, v3_scale(r.d, 0.5 + 2 * rng_uniform(j->seed, 4ull * k + i + 7)));
+				fan[i] = (struct ray){ oi, v3_sub(to, oi), 0, 1 };
+			}
+			occluded_check(j, fan);
 		}
 		struct hit h1, h2;
 		bool b1 = accel_intersect(j->a, &r, &h1), b2 = accel_intersect_brute(j->a, &r, &h2);
@@ -596,6 +626,10 @@ static void big_leaf(void)
 		bool f = accel_intersect(a, &r[0], &h), fb = accel_intersect_brute(a, &r[0], &hb);
 		mismatch += !same_hit(f, &h, fb, &hb);
 		mismatch += accel_occluded(a, &r[0]) != fb;
+		bool occ4[4];
+		uint32_t hint = ACCEL_NO_HINT;
+		accel_occluded4(a, r, occ4, &hint);
+		mismatch += occ4[0] != fb;
 		accel_intersect4(a, r, h4, hit4);
 		mismatch += !same_hit(hit4[0], &h4[0], f, &h);
 		hits += f;
