@@ -111,23 +111,26 @@ static vec3 trace_shade(void *arg, const struct ray *ray, uint64_t seed)
 }
 
 /*
- * Colours of n <= 4 pixels (px[k], py[k]) of a filter_single_ray chain:
- * their eye rays' closest hits from one accel_intersect4, each shaded as
- * filter_pixel over shade_trace would (the same colour, bit for bit). A
- * block of fewer than four pixels repeats its last ray.
+ * filter_trace4_fn over the shading engine: the colours of n <= 4 eye rays
+ * e[k], their closest hits from one accel_intersect4 and their shadow rays
+ * in packets (shade_eye_hit4), each what trace_shade gives (bit for bit).
+ * A packet of fewer than four rays repeats its last one; one ray alone
+ * goes through trace_shade.
  */
-static void eye_block(const struct renderer *r, const uint32_t px[4], const uint32_t py[4], int n, vec3 out[4])
+static void trace_shade4(void *arg, const struct ray e[4], const uint64_t seed[4], int n, vec3 out[4])
 {
+	const struct renderer *r = arg;
+	if (n == 1) { /* a packet of one ray costs four */
+		out[0] = trace_shade(arg, &e[0], seed[0]);
+		return;
+	}
 	struct ray u[4];
-	uint64_t seed[4];
 	bool ok[4];
 	for (int k = 0; k < 4; k++) {
 		int q = k < n ? k : n - 1;
-		struct ray e;
-		filter_eye_ray(&r->fc, px[q], py[q], &e, &seed[k]);
-		ok[k] = shade_eye_ray(&e, &u[k]);
+		ok[k] = shade_eye_ray(&e[q], &u[k]);
 		if (!ok[k])
-			u[k] = e; /* traced for nothing, never shaded */
+			u[k] = e[q]; /* traced for nothing, never shaded */
 	}
 	struct hit h[4];
 	bool hit[4];
@@ -136,6 +139,20 @@ static void eye_block(const struct renderer *r, const uint32_t px[4], const uint
 	for (int k = 0; k < 4; k++)
 		hp[k] = ok[k] && hit[k] ? &h[k] : NULL; /* !ok: black, as shade_eye_hit of a miss */
 	shade_eye_hit4(r->shade, u, hp, seed, n, out);
+}
+
+/*
+ * Colours of n <= 4 pixels (px[k], py[k]) of a filter_single_ray chain:
+ * their eye rays (filter_eye_ray) through trace_shade4, each what
+ * filter_pixel over trace_shade gives.
+ */
+static void eye_block(const struct renderer *r, const uint32_t px[4], const uint32_t py[4], int n, vec3 out[4])
+{
+	struct ray e[4];
+	uint64_t seed[4];
+	for (int k = 0; k < n; k++)
+		filter_eye_ray(&r->fc, px[k], py[k], &e[k], &seed[k]);
+	trace_shade4((void *)r, e, seed, n, out);
 }
 
 /* renderer_tile_cancellable for a filter_single_ray chain, in 2x2 blocks;
@@ -189,7 +206,8 @@ static void tile_pixels(const struct renderer *r, struct tile_rect t, uint8_t *r
 				memset(row + (size_t)i * 3, 0, 3);
 				continue;
 			}
-			vec3 c = filter_pixel(&r->fc, scratch, (uint32_t)x, (uint32_t)y, trace_shade, (void *)r, rays);
+			vec3 c = filter_pixel4(&r->fc, scratch, (uint32_t)x, (uint32_t)y, trace_shade, trace_shade4,
+					       (void *)r, rays);
 			filter_quantise(c, row + (size_t)i * 3);
 		}
 	}
