@@ -613,8 +613,11 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 			const struct geom_obj *go = g->xp[i].g;
 			vec3 lp = go->has_xform ? m34_point(&go->inv, p) : p;
 			vec3 n;
-			/* spheres' and cylinders' mappings (atan2, asin) later, from mp */
-			bool lazy = go->kind == PRIM_SPHERE || go->kind == PRIM_CYLINDER;
+			/* spheres' and cylinders' mappings (atan2, asin) later, from mp;
+			 * planes', disks' and polygons' too (the ground plane is half
+			 * the hits of a mesh scene) */
+			bool lazy = go->kind == PRIM_SPHERE || go->kind == PRIM_CYLINDER || go->kind == PRIM_PLANE ||
+				    go->kind == PRIM_DISK || go->kind == PRIM_POLYGON;
 			if (lazy) {
 				n = geom_normal(go, lp, c->part);
 				h->u = h->v = 0;
@@ -1029,6 +1032,9 @@ static inline bool hint_occludes(const struct accel *A, const struct group *g, u
  */
 struct ray4x {
 	__m128 o[3], inv_near[3], inv_far[3];
+	/* lane i's o, inv_near and inv_far broadcast to four lanes (one per
+	 * child): bvh_hit4 tests a node ray by ray, the four children at once */
+	__m128 lo[4][3], lnear[4][3], lfar[4][3];
 	double tscale[4];
 };
 
@@ -1097,24 +1103,37 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 		} else {
 			const struct bvh4 *nd = &nodes[idx];
 			const float *b = (const float *)(const void *)nd; /* rows as in node4_hit */
+			/* ray by ray, the four children in the lanes (node4_hit's
+			 * arithmetic, operand for operand), then transposed: e[c] is
+			 * child c's entry distance for each ray, +inf where it misses */
+			const __m128 nr[3] = { _mm_loadu_ps(b + near[0]), _mm_loadu_ps(b + near[1]),
+					       _mm_loadu_ps(b + near[2]) };
+			const __m128 fr[3] = { _mm_loadu_ps(b + far[0]), _mm_loadu_ps(b + far[1]),
+					       _mm_loadu_ps(b + far[2]) };
 			__m128 e[4];
-			float key[4];
 			int m = 0;
-			for (int c = 0; c < 4; c++) {
-				__m128 t0 = tmin4, t1 = tmax4;
-				for (int k = 0; k < 3; k++) {
-					__m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[near[k] + (uint32_t)c]), P->o[k]),
-							       P->inv_near[k]);
-					__m128 tf = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[far[k] + (uint32_t)c]), P->o[k]),
-							       P->inv_far[k]);
-					t0 = _mm_max_ps(t0, tn);
-					t1 = _mm_min_ps(t1, tf);
-				}
-				__m128 hit = _mm_cmple_ps(t0, t1);
-				e[c] = _mm_or_ps(_mm_and_ps(hit, t0), _mm_andnot_ps(hit, inf4));
-				m |= (_mm_movemask_ps(hit) != 0) << c;
-				key[c] = lanes_min(e[c]);
-			}
+#define RAY_NODE(i)                                                                                      \
+	do {                                                                                             \
+		__m128 t0 = _mm_shuffle_ps(tmin4, tmin4, _MM_SHUFFLE(i, i, i, i));                       \
+		__m128 t1 = _mm_shuffle_ps(tmax4, tmax4, _MM_SHUFFLE(i, i, i, i));                       \
+		for (int k = 0; k < 3; k++) {                                                            \
+			__m128 tn = _mm_mul_ps(_mm_sub_ps(nr[k], P->lo[i][k]), P->lnear[i][k]);          \
+			__m128 tf = _mm_mul_ps(_mm_sub_ps(fr[k], P->lo[i][k]), P->lfar[i][k]);           \
+			t0 = _mm_max_ps(t0, tn);                                                         \
+			t1 = _mm_min_ps(t1, tf);                                                         \
+		}                                                                                        \
+		__m128 hit = _mm_cmple_ps(t0, t1);                                                       \
+		e[i] = _mm_or_ps(_mm_and_ps(hit, t0), _mm_andnot_ps(hit, inf4));                         \
+		m |= _mm_movemask_ps(hit);                                                               \
+	} while (0)
+			RAY_NODE(0);
+			RAY_NODE(1);
+			RAY_NODE(2);
+			RAY_NODE(3);
+#undef RAY_NODE
+			float key[4]; /* each child's nearest entry over the rays */
+			_mm_storeu_ps(key, _mm_min_ps(_mm_min_ps(e[0], e[1]), _mm_min_ps(e[2], e[3])));
+			_MM_TRANSPOSE4_PS(e[0], e[1], e[2], e[3]);
 			if (m) { /* nearest first; the others pushed farthest first */
 				int cs[4], k = 0;
 				for (int c = 0; c < 4; c++) {
@@ -1179,6 +1198,11 @@ static void group_hit4(const struct accel *A, const struct group *g, struct trac
 		P.o[k] = _mm_loadu_ps(o[k]);
 		P.inv_near[k] = _mm_loadu_ps(inv_near[k]);
 		P.inv_far[k] = _mm_loadu_ps(inv_far[k]);
+		for (int i = 0; i < 4; i++) {
+			P.lo[i][k] = _mm_set1_ps(o[k][i]);
+			P.lnear[i][k] = _mm_set1_ps(inv_near[k][i]);
+			P.lfar[i][k] = _mm_set1_ps(inv_far[k][i]);
+		}
 	}
 	switch (oct) { /* one copy of the loop per octant, as group_hit */
 	case 0: bvh_hit4(A, g, tr, best, found, &P, 0); break;
