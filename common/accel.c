@@ -619,7 +619,8 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 			bool lazy = go->kind == PRIM_SPHERE || go->kind == PRIM_CYLINDER || go->kind == PRIM_PLANE ||
 				    go->kind == PRIM_DISK || go->kind == PRIM_POLYGON;
 			if (lazy) {
-				n = geom_normal(go, lp, c->part);
+				/* geom_normal's value; a plane's, the common case, inline */
+				n = go->kind == PRIM_PLANE ? go->u.pl.n : geom_normal(go, lp, c->part);
 				h->u = h->v = 0;
 				h->surf_fn = surface_cb;
 				h->surf_kind = SURF_XPRIM;
@@ -1056,6 +1057,126 @@ static inline float lanes_min(__m128 v)
 }
 
 /*
+ * TRIANGLE PRE-TEST ACROSS THE PACKET. Where the four rays share the
+ * watertight test's axis permutation (kx, ky, kz: neighbouring rays do),
+ * a leaf's triangle is first tested against the four at once in float:
+ * the same edge functions U, V, W as geom_tri_hit_p, from the vertices and
+ * origins rounded to float. A ray is rejected only where two of them have
+ * opposite signs by more than a margin that bounds the float result's
+ * distance from the double one; the double test then rejects too (its
+ * first test), so every ray not rejected is tested in double exactly as
+ * before and the hits stay bit for bit. The margin: with S the largest
+ * magnitude of the nine vertex components and the ray's origin (permuted),
+ * each of A, B, C minus the origin is within E1 = 2^-21 S of its double
+ * value (the roundings to float and the subtraction: 4 u S, u = 2^-24), the
+ * sheared a, b, c (|sx|, |sy| <= 1: kz is the dominant axis) within E2 =
+ * 2^-19 S (24 u S), and U = cx by - cy bx within E2 (|bx| + |by| + |cx| +
+ * |cy|) + 2 E2^2 + 2u (|cx by| + |cy bx|); the margin is twice that (the
+ * margin's own rounding and the double's, ~2^-52 relative) plus 2^-120 and
+ * floors of 2^-140 in E1 and E2 for subnormal floats. An infinite or NaN
+ * value anywhere makes a comparison false: no rejection.
+ */
+struct tri4 {
+	bool ok;   /* set up, and the four rays share kx, ky, kz */
+	int kx, ky, kz;
+	__m128 ox, oy, oz, sx, sy, so; /* per ray: origin, shear, max |origin| */
+};
+
+/* Sets up the pre-test for the packet (the rays' watertight set-up too). */
+static void tri4_init(struct tri4 *q, struct trace tr[4])
+{
+	float ox[4], oy[4], oz[4], sx[4], sy[4], so[4];
+	const struct geom_wray *w0 = trace_wray(&tr[0]);
+	q->ok = true;
+	q->kx = w0->kx, q->ky = w0->ky, q->kz = w0->kz;
+	for (int i = 0; i < 4; i++) {
+		const struct geom_wray *w = trace_wray(&tr[i]);
+		q->ok &= w->kx == q->kx && w->ky == q->ky && w->kz == q->kz;
+		ox[i] = (float)w->ox, oy[i] = (float)w->oy, oz[i] = (float)w->oz;
+		sx[i] = (float)w->sx, sy[i] = (float)w->sy;
+		float m = fabsf(ox[i]) > fabsf(oy[i]) ? fabsf(ox[i]) : fabsf(oy[i]);
+		so[i] = m > fabsf(oz[i]) ? m : fabsf(oz[i]);
+	}
+	q->ox = _mm_loadu_ps(ox), q->oy = _mm_loadu_ps(oy), q->oz = _mm_loadu_ps(oz);
+	q->sx = _mm_loadu_ps(sx), q->sy = _mm_loadu_ps(sy), q->so = _mm_loadu_ps(so);
+}
+
+static inline __m128 abs4(__m128 x) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), x); }
+
+/* The rays (bit i: ray i) that triangle abc certainly misses (TRIANGLE
+ * PRE-TEST); q->ok must hold. */
+static inline unsigned tri4_reject(const struct tri4 *q, const vec3 *a, const vec3 *b, const vec3 *c)
+{
+	const int kx = q->kx, ky = q->ky, kz = q->kz;
+	float v[9] = { (float)geom_comp(a, kx), (float)geom_comp(a, ky), (float)geom_comp(a, kz),
+		       (float)geom_comp(b, kx), (float)geom_comp(b, ky), (float)geom_comp(b, kz),
+		       (float)geom_comp(c, kx), (float)geom_comp(c, ky), (float)geom_comp(c, kz) };
+	float sv = 0;
+	for (int k = 0; k < 9; k++)
+		sv = fabsf(v[k]) > sv ? fabsf(v[k]) : sv; /* NaN: left out, but NaN below rejects nothing */
+	__m128 S = _mm_max_ps(q->so, _mm_set1_ps(sv));
+	__m128 Az = _mm_sub_ps(_mm_set1_ps(v[2]), q->oz), Bz = _mm_sub_ps(_mm_set1_ps(v[5]), q->oz),
+	       Cz = _mm_sub_ps(_mm_set1_ps(v[8]), q->oz);
+	__m128 ax = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[0]), q->ox), _mm_mul_ps(q->sx, Az));
+	__m128 ay = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[1]), q->oy), _mm_mul_ps(q->sy, Az));
+	__m128 bx = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[3]), q->ox), _mm_mul_ps(q->sx, Bz));
+	__m128 by = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[4]), q->oy), _mm_mul_ps(q->sy, Bz));
+	__m128 cx = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[6]), q->ox), _mm_mul_ps(q->sx, Cz));
+	__m128 cy = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[7]), q->oy), _mm_mul_ps(q->sy, Cz));
+	__m128 p1 = _mm_mul_ps(cx, by), p2 = _mm_mul_ps(cy, bx); /* U */
+	__m128 p3 = _mm_mul_ps(ax, cy), p4 = _mm_mul_ps(ay, cx); /* V */
+	__m128 p5 = _mm_mul_ps(bx, ay), p6 = _mm_mul_ps(by, ax); /* W */
+	__m128 U = _mm_sub_ps(p1, p2), V = _mm_sub_ps(p3, p4), W = _mm_sub_ps(p5, p6);
+	__m128 E2 = _mm_add_ps(_mm_mul_ps(S, _mm_set1_ps(0x1p-19f)), _mm_set1_ps(0x1p-140f));
+	__m128 two_e2 = _mm_add_ps(E2, E2), two_e2sq = _mm_mul_ps(two_e2, E2);
+	__m128 Aab = _mm_add_ps(abs4(ax), abs4(ay)), Bab = _mm_add_ps(abs4(bx), abs4(by)),
+	       Cab = _mm_add_ps(abs4(cx), abs4(cy));
+	const __m128 two_u = _mm_set1_ps(0x1p-23f), floor4 = _mm_set1_ps(0x1p-120f);
+	/* 2 [E2 (sum of |.|) + 2 E2^2 + 2u (|p| + |q|)] + 2^-120 */
+#define MARGIN(s1, s2, pa, pb)                                                                                   \
+	_mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(E2, _mm_add_ps(s1, s2)), two_e2sq),                 \
+					 _mm_mul_ps(two_u, _mm_add_ps(abs4(pa), abs4(pb)))),                        \
+			      _mm_set1_ps(2.0f)),                                                                   \
+		   floor4)
+	__m128 mU = MARGIN(Bab, Cab, p1, p2), mV = MARGIN(Aab, Cab, p3, p4), mW = MARGIN(Aab, Bab, p5, p6);
+#undef MARGIN
+	__m128 zero = _mm_setzero_ps();
+	__m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, _mm_sub_ps(zero, mU)), _mm_cmplt_ps(V, _mm_sub_ps(zero, mV))),
+			       _mm_cmplt_ps(W, _mm_sub_ps(zero, mW)));
+	__m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, mU), _mm_cmpgt_ps(V, mV)), _mm_cmpgt_ps(W, mW));
+	return (unsigned)_mm_movemask_ps(_mm_and_ps(neg, pos));
+}
+
+/* A leaf of n references from idx tested for the rays in lanes (two or
+ * more), reference by reference: triangles through the pre-test when the
+ * rays share their permutation (set up on the packet's first such leaf). */
+static inline __attribute__((always_inline)) void leaf4(const struct accel *A, const struct group *g,
+							struct trace tr[4], struct cand best[4], bool found[4],
+							uint32_t idx, uint32_t n, unsigned lanes, struct tri4 *q,
+							bool *q_ready)
+{
+	for (uint32_t k = 0; k < n; k++) {
+		uint32_t ref = group_ref(g, idx + k);
+		unsigned test = lanes;
+		if (REF_KIND(ref) == REF_TRI) {
+			if (!*q_ready) {
+				tri4_init(q, tr);
+				*q_ready = true;
+			}
+			if (q->ok) {
+				const struct gmesh *m = &g->mesh[g->tri[REF_IDX(ref)].mesh];
+				const uint32_t *ix = tri_ix(m, g->tri[REF_IDX(ref)].tri);
+				test &= ~tri4_reject(q, &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]]);
+			}
+		}
+		for (; test; test &= test - 1) {
+			int i = __builtin_ctz(test);
+			found[i] |= ref_test(A, g, ref, &tr[i], &best[i], false);
+		}
+	}
+}
+
+/*
  * The packet traversal of g's bounded references. A subtree is visited
  * when any ray may hit it, nearest (smallest entry over the rays) first;
  * each stack entry keeps every ray's entry distance (+inf for a ray that
@@ -1087,16 +1208,21 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 	uint32_t idx = 0, n = 0;
 	__m128 tcur = tmin4; /* the entry distances of the subtree at hand */
 	uint32_t polls = ACCEL_POLL_POPS;
+	struct tri4 q; /* TRIANGLE PRE-TEST, set up at the first leaf that needs it */
+	bool q_ready = false;
 	for (;;) {
 		if (n) {
-
 			/* the rays that meet the leaf, in front of their closest hit */
 			unsigned lanes = lanes_in_front(tcur, tmax4, inf4);
-			while (lanes) {
+			if (lanes & (lanes - 1)) { /* two or more: the triangle pre-test pays */
+				leaf4(A, g, tr, best, found, idx, n, lanes, &q, &q_ready);
+			} else if (lanes) {
 				int i = __builtin_ctz(lanes);
-				lanes &= lanes - 1;
 				for (uint32_t k = 0; k < n; k++)
 					found[i] |= ref_test(A, g, group_ref(g, idx + k), &tr[i], &best[i], false);
+			}
+			for (; lanes; lanes &= lanes - 1) {
+				int i = __builtin_ctz(lanes);
 				tmx[i] = box_tmax(tr[i].tmax * P->tscale[i]);
 			}
 			tmax4 = _mm_loadu_ps(tmx);

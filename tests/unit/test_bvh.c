@@ -640,6 +640,68 @@ static void big_leaf(void)
 	scene_free(s);
 }
 
+/*
+ * The packets' triangle pre-test (TRIANGLE PRE-TEST in accel.c) at its
+ * margins: a grid of triangles (near the origin, and 1000 units away,
+ * where floats are coarse) and packets of four rays from one origin aimed
+ * at the grid's shared vertices and edge midpoints, exactly and off by
+ * 1e-15 to 1e-7: every ray's hit is accel_intersect's, bit for bit.
+ */
+#define EDGE_GRID 6
+static void tri_margins(void)
+{
+	for (int far = 0; far < 2; far++) {
+		struct scene *s = scene_new();
+		struct scene_error err;
+		double x0 = far ? 1000 : 0, h = 1.0 / EDGE_GRID;
+		for (int j = 0; j < EDGE_GRID; j++)
+			for (int i = 0; i < EDGE_GRID; i++)
+				for (int t = 0; t < 2; t++) {
+					struct scene_object o;
+					scene_object_defaults(&o, PRIM_TRIANGLE);
+					vec3 p00 = v3(x0 + i * h, j * h, 0.01 * ((i + j) % 3)), p10 = v3(x0 + (i + 1) * h, j * h, 0);
+					vec3 p01 = v3(x0 + i * h, (j + 1) * h, 0), p11 = v3(x0 + (i + 1) * h, (j + 1) * h, 0.02);
+					o.u.triangle.a = p00;
+					o.u.triangle.b = t ? p11 : p10;
+					o.u.triangle.c = t ? p01 : p11;
+					uint32_t id;
+					CHECK(scene_add_object(s, &o, &id, &err) == 0);
+					CHECK(scene_add_root(s, id, &err) == 0);
+				}
+		struct accel *a;
+		CHECK(accel_build(s, &a, &err) == 0);
+		int mismatch = 0, hits = 0;
+		static const double offs[] = { 0, 1e-15, 1e-12, 1e-9, 1e-7 };
+		for (int k = 0; k < 4000; k++) {
+			int i = (int)(rng_uniform(31, 3ull * k) * (EDGE_GRID + 1)), j = (int)(rng_uniform(31, 3ull * k + 1) * (EDGE_GRID + 1));
+			double half = k % 3 == 1 ? h / 2 : 0; /* a vertex, or an edge's midpoint */
+			vec3 target = v3(x0 + i * h + half, j * h + (k % 3 == 2 ? h / 2 : 0), 0);
+			vec3 o = v3(x0 + 2 * rng_uniform(31, 3ull * k + 2) - 0.5, 1.5 * rng_uniform(32, k) - 0.25,
+				    0.5 + 2 * rng_uniform(33, k));
+			double e = offs[k % 5];
+			struct ray r[4];
+			for (int l = 0; l < 4; l++) {
+				vec3 tl = v3_add(target, v3(e * ((l & 1) ? 1 : -1), e * ((l & 2) ? 1 : -1), 0));
+				r[l] = (struct ray){ o, v3_sub(tl, o), 0, INFINITY };
+			}
+			struct hit h4[4], h1;
+			bool hit4[4];
+			accel_intersect4(a, r, h4, hit4);
+			for (int l = 0; l < 4; l++) {
+				bool b1 = accel_intersect(a, &r[l], &h1);
+				mismatch += !same_hit(b1, &h1, hit4[l], &h4[l]);
+				hits += b1;
+			}
+		}
+		printf("triangle pre-test margins (%s): 16000 rays, %d hits, %d unlike single rays\n",
+		       far ? "1000 units away" : "at the origin", hits, mismatch);
+		CHECK(mismatch == 0);
+		CHECK(hits > 8000);
+		accel_free(a);
+		scene_free(s);
+	}
+}
+
 int main(void)
 {
 	const char *full = getenv("PORTRAY_TEST_FULL");
@@ -647,6 +709,7 @@ int main(void)
 		n_rays = N_RAYS_FULL;
 	builder();
 	big_leaf();
+	tri_margins();
 	far_away();
 	mixed();
 	many_instances();
