@@ -382,6 +382,10 @@ static void corners(struct adapt *a, int n, const uint32_t x[], const uint32_t y
 		else
 			miss[n_miss++] = i;
 	}
+	if (n_miss == 1) { /* nothing to trace together: corner()'s lookup misses again */
+		out[miss[0]] = corner(a, x[miss[0]], y[miss[0]]);
+		return;
+	}
 	const struct filter_chain *fc = a->w.fc;
 	for (int j0 = 0; j0 < n_miss; j0 += 4) {
 		int m = n_miss - j0 < 4 ? n_miss - j0 : 4;

@@ -23,6 +23,10 @@
 /* render_ncpus at most: far more than any machine's cores, small enough
  * that a mistaken -j cannot exhaust the process. */
 #define RENDER_MAX_THREADS 1024
+/* Eye rays at least that trace_shade4 traces as a packet; fewer go one by
+ * one: packets of two or three (the last ray repeated) made adaptive
+ * renders of the teapot 3% slower (docs/performance.md, round 4). */
+#define PACKET_MIN_RAYS 4
 
 struct renderer {
 	const struct scene *s;
@@ -114,14 +118,15 @@ static vec3 trace_shade(void *arg, const struct ray *ray, uint64_t seed)
  * filter_trace4_fn over the shading engine: the colours of n <= 4 eye rays
  * e[k], their closest hits from one accel_intersect4 and their shadow rays
  * in packets (shade_eye_hit4), each what trace_shade gives (bit for bit).
- * A packet of fewer than four rays repeats its last one; one ray alone
- * goes through trace_shade.
+ * Fewer than PACKET_MIN_RAYS rays go one by one through trace_shade; a
+ * packet of fewer than four repeats its last ray.
  */
 static void trace_shade4(void *arg, const struct ray e[4], const uint64_t seed[4], int n, vec3 out[4])
 {
 	const struct renderer *r = arg;
-	if (n == 1) { /* a packet of one ray costs four */
-		out[0] = trace_shade(arg, &e[0], seed[0]);
+	if (n < PACKET_MIN_RAYS) { /* a packet of fewer rays costs four */
+		for (int k = 0; k < n; k++)
+			out[k] = trace_shade(arg, &e[k], seed[k]);
 		return;
 	}
 	struct ray u[4];
