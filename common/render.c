@@ -6,7 +6,10 @@
  * shade_trace, so it depends on the scene and the pixel alone. With one eye
  * ray per pixel (filter standard), the tile goes in 2x2 blocks whose eye
  * rays find their closest hits together (accel_intersect4: the same hits,
- * faster); each pixel is then shaded alone, exactly as filter_pixel would.
+ * faster) and whose shadow rays toward each point light go together too
+ * (shade_eye_hit4); each pixel gets exactly the colour filter_pixel would
+ * give. Other filters trace super-sample grids and adaptive corners four
+ * rays at a time the same way (filter_pixel4 over trace_shade4).
  */
 #include "common/render.h"
 

@@ -80,12 +80,12 @@ static uint32_t *light_hint(const struct shade_ctx *c, uint32_t i)
 }
 
 /*
- * SHADOW PACKETS. Point lights that cast shadows are at most this many of
- * the first lights for which the shadow rays of a 2x2 block's eye hits are
- * traced together (accel_occluded4) before the block is shaded; a bit per
- * light in struct shadow_pre. Shading then takes each ray's answer from
- * there instead of tracing it: the same ray (built by shadow_ray in both
- * places), so the same answer.
+ * SHADOW PACKETS. Before a 2x2 block of eye hits is shaded, their shadow
+ * rays toward each point light among the first SHADE_PRE_LIGHTS lights
+ * are traced together (shadow_packets, accel_occluded4); struct
+ * shadow_pre keeps a bit per light. direct() then takes a ray's answer
+ * from there instead of tracing it: shadow_packets builds the same ray
+ * with direct()'s and transmittance()'s arithmetic, so the same answer.
  */
 #define SHADE_PRE_LIGHTS 32
 struct shadow_pre {
