@@ -25,6 +25,7 @@
 #include <unistd.h>
 
 #include "master/farm_int.h"
+#include "master/http.h"
 #include "master/interrupt.h"
 #include "proto/net.h"
 #include "proto/serial.h"
@@ -423,6 +424,7 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	int rc = EXIT_USAGE;
 	struct worker_addr *addrs = NULL;
 	struct tile_pool *pool = NULL;
+	struct http *view = NULL;
 	struct local L;
 	char err[600];
 
@@ -476,6 +478,8 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	L = (struct local){ .f = &f, .r = r, .audit_only = o->no_local };
 	atomic_init(&L.oom, 0);
 	struct tile_source src = { local_take, local_done, &L };
+	if (o->http && http_start(&f, n_threads, &view) < 0)
+		goto out;
 	for (uint32_t i = 0; i < f.n_w; i++)
 		worker_start(&f.w[i]);
 	if (n_threads > 0 && !(pool = tile_pool_start(n_threads, &src))) {
@@ -499,6 +503,7 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	if (f.tty)
 		progress_draw(&f);
 	summary(&f);
+	http_finish(view); /* the viewers' last tiles, and --http-linger */
 	struct sched_stats st;
 	sched_stats(f.s, &st);
 	*finished = st.done;
@@ -519,6 +524,7 @@ out:
 		sched_stop(f.s);
 		tile_pool_join(pool);
 	}
+	http_free(view);
 	for (uint32_t i = 0; f.w && i < f.n_w; i++)
 		worker_free(&f.w[i]);
 	free(f.w);

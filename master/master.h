@@ -40,6 +40,11 @@ struct master_opts {
 	double heartbeat_s;    /* --heartbeat-timeout S (farm) */
 	double audit;          /* --audit F: fraction of worker tiles re-rendered here to check them (farm);
 				* 0 = no audits; main sets MASTER_AUDIT_DEFAULT */
+	/* the live view (master/http.h, docs/live-view.md) */
+	const char *http;          /* --http ADDR:PORT, or NULL */
+	const char *http_port_file; /* --http-port-file F: the --http port, written once listening */
+	bool http_public;          /* --http-public: --http beyond loopback */
+	double http_linger;        /* --http-linger S: serve the finished image S seconds more */
 };
 
 struct scene_camera;
