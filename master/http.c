@@ -151,10 +151,12 @@ static void to_rgb8(const struct http *h, size_t n_px)
 
 /* ---- status ---- */
 
-static const char *worker_state(const struct worker *w)
+static const char *worker_state(const struct http *h, const struct worker *w)
 {
 	if (w->dropped)
 		return "dropped";
+	if (h->ended)
+		return w->tiles_done ? "finished" : "unused";
 	switch (w->state) {
 	case W_IDLE: return w->accepted ? "gone" : w->why[0] ? "waiting to reconnect" : "idle";
 	case W_CONNECTING: return "connecting";
@@ -228,7 +230,7 @@ static void status_build(struct http *h)
 			continue;
 		}
 		proto_put_u8(b, ',');
-		put_row(b, w->name, w->threads, w->tiles_done, h->rate[i], worker_state(w), w->why);
+		put_row(b, w->name, w->threads, w->tiles_done, h->rate[i], worker_state(h, w), w->why);
 		rows++;
 	}
 	put_fmt(b, "],\"more\":%u}", more);
