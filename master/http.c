@@ -451,7 +451,7 @@ static void respond(struct hconn *c, int code, const char *type, const void *bod
 	free(c->req);
 	c->req = NULL;
 	c->out.len = c->out_off = 0;
-	put_head(c, code, type, (long)len);
+	put_head(c, code, type, body || !head ? (long)len : -1); /* HEAD of a stream: no length */
 	if (extra)
 		put_str(&c->out, extra);
 	put_str(&c->out, "\r\n");
@@ -686,7 +686,9 @@ static void conn_io(struct ev_loop *l, int fd, short revents, void *arg)
 		ssize_t n = recv(c->fd, sink, sizeof sink, MSG_DONTWAIT);
 		if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
 			c->peer_eof = true;
-			if (c->st == HC_DRAIN || n < 0) {
+			/* a viewer that shuts its side is gone (EventSource never
+			 * half-closes); a response may still be read after it */
+			if (c->st != HC_RESP || n < 0) {
 				conn_close(c);
 				return;
 			}
@@ -891,9 +893,9 @@ void http_finish(struct http *h)
 		if (h->c[i].st == HC_STREAM && !h->c[i].polling_out)
 			pump(&h->c[i]);
 	for (;;) {
-		bool busy = false;
+		bool busy = false; /* something left to send (draining ones are not waited for) */
 		for (int i = 0; i < HTTP_CONN_MAX && !busy; i++)
-			busy = h->c[i].st != HC_FREE;
+			busy = h->c[i].st == HC_RESP || h->c[i].st == HC_STREAM;
 		double left = until - net_now();
 		if ((linger <= 0 && !busy) || left <= 0)
 			break;

@@ -2,7 +2,8 @@
 # The live view (--http) of a farm render, master + two workers: the page
 # and /status are served, a viewer that follows the tile stream from the
 # start and one that connects halfway both rebuild an image equal to the
-# written file, and a slow viewer (reading 200 kB/s for a while) does too.
+# written file, and a slow viewer (reading 200 kB/s for a while) does too;
+# a 17th viewer is refused (503) while 16 that read nothing hold their slots.
 # Plus the option checks: beyond loopback, a bad address or a companion
 # option without --http is refused at once (64).
 . "$(dirname "$0")/farm_lib.inc"
@@ -65,4 +66,15 @@ done
 awk '{ if (!($8 > 0 && $8 < $10)) exit 1 }' "$T/v2.out" ||
 	fail "viewer 2 did not join during the render: $(cat "$T/v2.out")"
 grep -q '"stopped":false' "$T/v1.log" || fail "the end event does not say finished"
+
+# at most 16 viewers: 16 that read nothing hold their slots, a 17th gets 503,
+# one leaving makes room; and the render goes on regardless
+"$BIN/portray-master" "$SLOW" -o "$T/local.ppm" $OPTS --http 127.0.0.1:0 --http-port-file "$T/h2.port" \
+	2>"$T/master2.log" &
+M=$!
+PIDS="$PIDS $M"
+wait_port h2 $M
+"$LC" viewers "$h2_PORT" 16 || fail "the viewer limit"
+wait $M || fail "the master with 16 viewers failed"
+cmp "$T/farm.ppm" "$T/local.ppm" || fail "the local render with 16 stuck viewers differs"
 echo "ok"

@@ -20,6 +20,10 @@
  *       open ones S seconds (default 3) while checking that the server
  *       still answers a good request, then (with S > HTTP_HEADER_S) that it
  *       closed the unfinished ones. Exit 0 when every answer was right.
+ *   liveclient viewers PORT N
+ *       opens N streams that read nothing past their head (200 each), then
+ *       checks that one more gets 503 and, once one of the N is closed, a
+ *       new one is let in. Exit 0 when so.
  * Every mode gives up after 120 s (exit 1).
  */
 #include <errno.h>
@@ -596,6 +600,63 @@ static int do_garbage(int n, double hold)
 	return failures ? 1 : 0;
 }
 
+/* ---- the viewer limit ---- */
+
+/* A stream request; returns the status code of its head (the socket kept in *fd). */
+static int open_stream(int *fd)
+{
+	*fd = dial();
+	int small = 2048;
+	setsockopt(*fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+	char req[128];
+	int n = snprintf(req, sizeof req, "GET /events HTTP/1.1\r\nHost: 127.0.0.1:%d\r\n\r\n", port);
+	send_all(*fd, req, (size_t)n);
+	char head[64];
+	size_t got = 0;
+	while (got < 12) {
+		struct pollfd p = { *fd, POLLIN, 0 };
+		if (poll(&p, 1, 10000) <= 0)
+			die("no answer to a stream request");
+		ssize_t r = recv(*fd, head + got, 12 - got, 0);
+		if (r <= 0)
+			die("a stream request closed without an answer");
+		got += (size_t)r;
+	}
+	head[got] = 0;
+	return status_of(head);
+}
+
+static int do_viewers(int n)
+{
+	int *fds = calloc((size_t)n + 1, sizeof *fds);
+	for (int i = 0; i < n; i++) {
+		int code = open_stream(&fds[i]);
+		if (code != 200)
+			die("viewer %d of %d: %d, not 200", i + 1, n, code);
+	}
+	int extra, code = open_stream(&extra);
+	printf("viewer %d: %d\n", n + 1, code);
+	if (code != 503)
+		die("viewer %d: %d, not 503", n + 1, code);
+	close(extra);
+	close(fds[0]);
+	/* the server sees the close when it next writes or reads: retry a while */
+	for (int k = 0;; k++) {
+		usleep(100000);
+		code = open_stream(&extra);
+		close(extra);
+		if (code == 200)
+			break;
+		if (k == 50)
+			die("no room for a viewer after one left (%d)", code);
+	}
+	printf("a new viewer after one left: 200\n");
+	for (int i = 1; i < n; i++)
+		close(fds[i]);
+	free(fds);
+	return 0;
+}
+
 int main(int argc, char **argv)
 {
 	signal(SIGPIPE, SIG_IGN);
@@ -628,6 +689,8 @@ int main(int argc, char **argv)
 		}
 		return do_stream(argv[3], after, slow, quiet);
 	}
+	if (!strcmp(argv[1], "viewers") && argc == 4)
+		return do_viewers(atoi(argv[3]));
 	if (!strcmp(argv[1], "garbage") && argc >= 4) {
 		double hold = 3;
 		for (int i = 4; i + 1 < argc; i += 2) {
@@ -642,6 +705,6 @@ int main(int argc, char **argv)
 	}
 usage:
 	fprintf(stderr, "usage: liveclient get PORT PATH [METHOD] | stream PORT OUT.ppm [--after F] [--slow-for S]"
-			" [--quiet-for S] | hash FILE.ppm | garbage PORT N [--hold S] [--seed X]\n");
+			" [--quiet-for S] | hash FILE.ppm | garbage PORT N [--hold S] [--seed X] | viewers PORT N\n");
 	return 2;
 }
