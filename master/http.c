@@ -869,6 +869,11 @@ oom:
 	return -1;
 }
 
+/* the one process-wide figure: a master renders once */
+static double lingered_s;
+
+double http_lingered(void) { return lingered_s; }
+
 void http_finish(struct http *h)
 {
 	if (!h)
@@ -879,7 +884,7 @@ void http_finish(struct http *h)
 	ev_timer_stop(h->loop, &h->tick);
 	status_build(h);
 	double linger = h->stopped ? 0 : f->o->http_linger;
-	double until = net_now() + (linger > 0 ? linger : HTTP_FLUSH_S);
+	double t0 = net_now(), until = t0 + (linger > 0 ? linger : HTTP_FLUSH_S);
 	if (linger > 0 && !f->o->quiet)
 		farm_log(f, "live view: serving the finished image for %.0f s more (q or Ctrl-C ends it)", linger);
 	if (linger <= 0) {
@@ -904,6 +909,8 @@ void http_finish(struct http *h)
 		if (ev_run_once(h->loop, left) < 0 && errno != EINTR)
 			break;
 	}
+	if (linger > 0)
+		lingered_s = net_now() - t0;
 }
 
 void http_free(struct http *h)

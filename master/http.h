@@ -67,6 +67,9 @@ int http_start(struct farm *f, int local_threads, struct http **out);
  * their last bytes. Runs the loop; NULL is a no-op.
  */
 void http_finish(struct http *h);
+/* Seconds this process spent in http_finish's --http-linger (render.c
+ * leaves them out of the render time). */
+double http_lingered(void);
 /* Closes every connection and the listening socket; NULL is a no-op. */
 void http_free(struct http *h);
 

@@ -17,6 +17,7 @@
 #include "common/parse.h"
 #include "common/render.h"
 #include "master/farm.h"
+#include "master/http.h"
 #include "master/interrupt.h"
 #include "master/master.h"
 #include "master/progress.h"
@@ -234,7 +235,7 @@ int master_render(const struct master_opts *o)
 	if (rc && rc != ERRLEVEL_LEVEL2 && !atomic_load(&cancel))
 		goto done; /* farm_render said why */
 	rc = 0;
-	double t_render = progress_now();
+	double t_render = progress_now() - http_lingered(); /* --http-linger is not render time */
 	bool partial = finished < total;
 
 	char partial_why[160] = "", bufs[4][512];
