@@ -376,8 +376,11 @@ static void pump(struct hconn *c)
 		if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
 			c->polling_out = true;
 			set_events(c);
-			if (!ev_timer_armed(&c->tm))
+			if (!ev_timer_armed(&c->tm)) {
+				/* a stall starts: the peer has HTTP_STALL_S from now to take bytes */
+				c->progress_at = net_now();
 				ev_timer_arm(c->h->loop, &c->tm, c->progress_at + HTTP_STALL_S);
+			}
 			return;
 		}
 		if (n <= 0) {
