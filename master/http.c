@@ -891,8 +891,10 @@ void http_finish(struct http *h)
 	if (linger > 0 && !f->o->quiet)
 		farm_log(f, "live view: serving the finished image for %.0f s more (q or Ctrl-C ends it)", linger);
 	if (linger <= 0) {
-		/* nobody new; requests not yet whole will not be answered */
+		/* nobody new; requests already here are read (one round), those
+		 * not yet whole will not be answered */
 		stop_listening(h);
+		ev_run_once(h->loop, 0);
 		for (int i = 0; i < HTTP_CONN_MAX; i++)
 			if (h->c[i].st == HC_REQ)
 				conn_close(&h->c[i]);

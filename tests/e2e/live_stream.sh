@@ -3,7 +3,8 @@
 # and /status are served, a viewer that follows the tile stream from the
 # start and one that connects halfway both rebuild an image equal to the
 # written file, and a slow viewer (reading 200 kB/s for a while) does too;
-# a 17th viewer is refused (503) while 16 that read nothing hold their slots.
+# a 17th viewer is refused (503) while 16 that read nothing hold their slots;
+# a render stopped by SIGINT ends the stream saying so, with the partial image.
 # Plus the option checks: beyond loopback, a bad address or a companion
 # option without --http is refused at once (64).
 . "$(dirname "$0")/farm_lib.inc"
@@ -66,6 +67,24 @@ done
 awk '{ if (!($8 > 0 && $8 < $10)) exit 1 }' "$T/v2.out" ||
 	fail "viewer 2 did not join during the render: $(cat "$T/v2.out")"
 grep -q '"stopped":false' "$T/v1.log" || fail "the end event does not say finished"
+
+# a render stopped by Ctrl-C (SIGINT): the stream ends saying so, and the
+# viewer's image is the partial one written (the rest black)
+"$BIN/portray-master" "$SLOW" -o "$T/part.ppm" $OPTS --http 127.0.0.1:0 --http-port-file "$T/h3.port" \
+	2>"$T/master3.log" &
+M=$!
+PIDS="$PIDS $M"
+wait_port h3 $M
+"$LC" stream "$h3_PORT" "$T/v4.ppm" >"$T/v4.out" 2>"$T/v4.log" &
+V4=$!
+wait_for "$T/v4.log" "streaming" "viewer 4 to join"
+kill -INT $M
+wait $M
+rc=$?
+[ $rc -eq 130 ] || fail "the master stopped by SIGINT exited $rc, not 130"
+wait $V4 || fail "viewer 4 (stopped render) failed: $(cat "$T/v4.log")"
+grep -q '"stopped":true' "$T/v4.log" || fail "the end event of a stopped render does not say so"
+cmp "$T/part.ppm" "$T/v4.ppm" || fail "the viewer's image differs from the partial file"
 
 # at most 16 viewers: 16 that read nothing hold their slots, a 17th gets 503,
 # one leaving makes room; and the render goes on regardless

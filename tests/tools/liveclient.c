@@ -293,6 +293,7 @@ static int do_stream(const char *out, double after, double slow_for, double quie
 				die("not an event stream: %.*s", (int)(e - b), b);
 			head_done = true;
 			pos = (size_t)(e + 4 - b);
+			fprintf(stderr, "liveclient: streaming\n");
 		}
 		/* whole lines */
 		for (;;) {
