@@ -549,47 +549,46 @@ static bool host_is_loopback(const char *v, size_t n)
 	return true;
 }
 
-/*
- * The request in c->req[0..end) is whole (end: past its blank line).
- * request-line = method SP target SP HTTP-version CRLF; then header lines
- * name ":" value CRLF. Answers it.
- */
-static void handle_request(struct hconn *c, size_t end)
+int http_parse(const char *req, size_t len, bool any_host, struct http_request *rq)
 {
-	char *p = c->req, *stop = c->req + end;
+	const char *p = req, *stop = req + len;
 	while (p < stop && (*p == '\r' || *p == '\n'))
 		p++; /* blank lines before a request are allowed */
-	char *eol = memchr(p, '\n', (size_t)(stop - p));
+	const char *eol = memchr(p, '\n', (size_t)(stop - p));
 	if (!eol)
-		{ respond_error(c, 400); return; }
-	char *m = p, *sp1 = memchr(m, ' ', (size_t)(eol - m));
+		return 400;
+	/* request-line = method SP target SP HTTP-version CRLF */
+	const char *m = p, *sp1 = memchr(m, ' ', (size_t)(eol - m));
 	if (!sp1 || sp1 == m || sp1 - m > 16)
-		{ respond_error(c, 400); return; }
-	for (char *q = m; q < sp1; q++)
+		return 400;
+	for (const char *q = m; q < sp1; q++)
 		if (!is_tchar(*q))
-			{ respond_error(c, 400); return; }
-	char *t = sp1 + 1, *sp2 = memchr(t, ' ', (size_t)(eol - t));
+			return 400;
+	const char *t = sp1 + 1, *sp2 = memchr(t, ' ', (size_t)(eol - t));
 	if (!sp2 || *t != '/' || sp2 - t > HTTP_TARGET_MAX)
-		{ respond_error(c, 400); return; }
-	char *v = sp2 + 1, *ve = eol > v && eol[-1] == '\r' ? eol - 1 : eol;
+		return 400;
+	const char *v = sp2 + 1, *ve = eol > v && eol[-1] == '\r' ? eol - 1 : eol;
 	if (ve - v != 8 || memcmp(v, "HTTP/1.", 7) != 0 || v[7] < '0' || v[7] > '9')
-		{ respond_error(c, 400); return; }
-	/* the headers: well formed; Host looked at */
-	bool host_ok = c->h->public;
+		return 400;
+	/* header-field = name ":" OWS value OWS CRLF, up to the blank line */
+	bool host_ok = any_host, blank = false;
 	int n_host = 0;
-	for (char *line = eol + 1; line < stop;) {
-		char *le = memchr(line, '\n', (size_t)(stop - line));
-		char *e = le > line && le[-1] == '\r' ? le - 1 : le;
-		if (e == line)
-			break; /* the blank line */
-		char *colon = memchr(line, ':', (size_t)(e - line));
+	for (const char *line = eol + 1; line < stop && !blank;) {
+		const char *le = memchr(line, '\n', (size_t)(stop - line));
+		if (!le)
+			return 400; /* no blank line: not a whole head */
+		const char *e = le > line && le[-1] == '\r' ? le - 1 : le;
+		blank = e == line;
+		if (blank)
+			break; /* the end of the head */
+		const char *colon = memchr(line, ':', (size_t)(e - line));
 		if (!colon || colon == line)
-			{ respond_error(c, 400); return; }
-		for (char *q = line; q < colon; q++)
+			return 400;
+		for (const char *q = line; q < colon; q++)
 			if (!is_tchar(*q))
-				{ respond_error(c, 400); return; }
+				return 400;
 		if (colon - line == 4 && strncasecmp(line, "host", 4) == 0) {
-			char *hv = colon + 1;
+			const char *hv = colon + 1;
 			while (hv < e && (*hv == ' ' || *hv == '\t'))
 				hv++;
 			n_host++;
@@ -597,35 +596,59 @@ static void handle_request(struct hconn *c, size_t end)
 		}
 		line = le + 1;
 	}
-	if (n_host > 1)
-		{ respond_error(c, 400); return; }
+	if (!blank || n_host > 1)
+		return 400;
 	if (n_host == 0)
 		host_ok = true; /* HTTP/1.0 without Host: not a browser's request */
 	bool get = sp1 - m == 3 && memcmp(m, "GET", 3) == 0, head = sp1 - m == 4 && memcmp(m, "HEAD", 4) == 0;
 	if (!get && !head)
-		{ respond_error(c, 405); return; }
+		return 405;
 	if (!host_ok)
-		{ respond_error(c, 403); return; }
+		return 403;
 	size_t tl = (size_t)(sp2 - t);
-	char *qm = memchr(t, '?', tl);
+	const char *qm = memchr(t, '?', tl);
 	if (qm)
 		tl = (size_t)(qm - t);
+	rq->head = head;
 #define IS(path) (tl == strlen(path) && memcmp(t, path, tl) == 0)
-	if (IS("/") || IS("/index.html")) {
-		respond(c, 200, "text/html; charset=utf-8", view_page, view_page_len, head,
+	if (IS("/") || IS("/index.html"))
+		rq->target = HTTP_PAGE;
+	else if (IS("/events"))
+		rq->target = HTTP_EVENTS;
+	else if (IS("/status"))
+		rq->target = HTTP_STATUS;
+	else
+		return 404;
+#undef IS
+	return 200;
+}
+
+/* The request in c->req[0..end) is whole (end: past its blank line): answers it. */
+static void handle_request(struct hconn *c, size_t end)
+{
+	struct http_request rq;
+	int code = http_parse(c->req, end, c->h->public, &rq);
+	if (code != 200) {
+		respond_error(c, code);
+		return;
+	}
+	switch (rq.target) {
+	case HTTP_PAGE:
+		respond(c, 200, "text/html; charset=utf-8", view_page, view_page_len, rq.head,
 			"Content-Security-Policy: default-src 'none'; script-src 'unsafe-inline'; "
 			"style-src 'unsafe-inline'; connect-src 'self'; img-src data:; frame-ancestors 'none'\r\n"
 			"Referrer-Policy: no-referrer\r\n");
-	} else if (IS("/events")) {
-		start_stream(c, head);
-	} else if (IS("/status")) {
+		break;
+	case HTTP_EVENTS:
+		start_stream(c, rq.head);
+		break;
+	case HTTP_STATUS: {
 		status_build(c->h);
 		struct proto_wbuf *s = &c->h->status;
-		respond(c, s->oom ? 503 : 200, "application/json", s->p, s->len, head, NULL);
-	} else {
-		respond_error(c, 404);
+		respond(c, s->oom ? 503 : 200, "application/json", s->p, s->len, rq.head, NULL);
+		break;
 	}
-#undef IS
+	}
 }
 
 /* Where the request's head ends (past its blank line), or 0 when not yet. */
@@ -655,8 +678,10 @@ static void read_request(struct hconn *c)
 	c->req_len += (size_t)n;
 	for (size_t i = was; i < c->req_len; i++) {
 		unsigned char ch = (unsigned char)c->req[i];
-		if ((ch < 0x20 && ch != '\r' && ch != '\n' && ch != '\t') || ch == 0x7f)
-			{ respond_error(c, 400); return; } /* not text: not HTTP */
+		if ((ch < 0x20 && ch != '\r' && ch != '\n' && ch != '\t') || ch == 0x7f) {
+			respond_error(c, 400); /* not text: not HTTP */
+			return;
+		}
 	}
 	/* skip leading blank lines when looking for the blank line that ends it */
 	size_t skip = 0;

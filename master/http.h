@@ -20,6 +20,7 @@
 #ifndef PORTRAY_HTTP_H
 #define PORTRAY_HTTP_H
 
+#include <stdbool.h>
 #include <stddef.h>
 
 struct farm;
@@ -72,6 +73,21 @@ void http_finish(struct http *h);
 double http_lingered(void);
 /* Closes every connection and the listening socket; NULL is a no-op. */
 void http_free(struct http *h);
+
+/* What a request asks for (http_parse). */
+enum http_target { HTTP_PAGE, HTTP_EVENTS, HTTP_STATUS };
+struct http_request {
+	enum http_target target;
+	bool head;              /* HEAD: the head alone */
+};
+/*
+ * Parses a request's head, req[0..len) up to and with its blank line (bytes
+ * already checked to be text). Returns 200 with *rq, or the error to answer:
+ * 400 (malformed request line or header, a second Host), 405 (a method but
+ * GET and HEAD), 403 (a Host that is not a loopback name, unless any_host),
+ * 404 (another path).
+ */
+int http_parse(const char *req, size_t len, bool any_host, struct http_request *rq);
 
 /* master/view_page.c: the page */
 extern const char view_page[];
