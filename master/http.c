@@ -133,19 +133,16 @@ static size_t base64(const uint8_t *in, size_t n, char *out)
 	return o;
 }
 
-/* Tile pixels as the scheduler keeps them (sched_bpp bytes each) to RGB8:
- * 3 bytes are RGB8 already; 12 are 3 floats, rounded as filter_quantise
- * rounds them for an 8-bit file. */
-static void to_rgb8(const struct http *h, size_t n_px)
+void http_to_rgb8(const uint8_t *px, uint32_t bpp, size_t n_px, uint8_t *rgb)
 {
-	if (h->bpp == 3) {
-		memcpy(h->rgb, h->px, n_px * 3);
+	if (bpp == 3) {
+		memcpy(rgb, px, n_px * 3);
 		return;
 	}
 	for (size_t i = 0; i < n_px; i++) {
 		float v[3];
-		memcpy(v, h->px + i * 12, sizeof v);
-		filter_quantise((vec3){ v[0], v[1], v[2] }, h->rgb + i * 3);
+		memcpy(v, px + i * 12, sizeof v);
+		filter_quantise((vec3){ v[0], v[1], v[2] }, rgb + i * 3);
 	}
 }
 
@@ -294,7 +291,7 @@ static void append_tile_event(struct http *h, struct hconn *c, uint32_t id, bool
 		}
 		return;
 	}
-	to_rgb8(h, (size_t)r.w * r.h);
+	http_to_rgb8(h->px, h->bpp, (size_t)r.w * r.h, h->rgb);
 	size_t n = base64(h->rgb, (size_t)r.w * r.h * 3, h->b64);
 	put_fmt(&c->out, "event: tile\ndata: %u %u %u %u ", r.x, r.y, r.w, r.h);
 	proto_put_bytes(&c->out, h->b64, n);

@@ -22,6 +22,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 struct farm;
 struct http;
@@ -88,6 +89,13 @@ struct http_request {
  * 404 (another path).
  */
 int http_parse(const char *req, size_t len, bool any_host, struct http_request *rq);
+
+/*
+ * n_px pixels as the scheduler keeps them (sched_bpp bytes each) to RGB8 for
+ * the page: 3 bytes are RGB8 already; 12 are 3 floats (the float pipeline),
+ * rounded as filter_quantise rounds them for an 8-bit file.
+ */
+void http_to_rgb8(const uint8_t *px, uint32_t bpp, size_t n_px, uint8_t *rgb);
 
 /* master/view_page.c: the page */
 extern const char view_page[];

@@ -2,11 +2,14 @@
  * test_http.c - the live view's request parser (master/http.c, http_parse):
  * what each request line and header set is answered with, the Host check
  * against DNS rebinding, and that no prefix of a good request (a head cut
- * anywhere, as a slow peer's bytes arrive) is taken for a request.
+ * anywhere, as a slow peer's bytes arrive) is taken for a request; and the
+ * pixels shown (http_to_rgb8): RGB8 as it is, floats rounded as an 8-bit
+ * file rounds them.
  */
 #include <string.h>
 
 #include "check.h"
+#include "common/filter.h"
 #include "master/http.h"
 
 static int parse(const char *req, bool any_host, struct http_request *rq)
@@ -86,6 +89,22 @@ int main(void)
 		taken += http_parse(good, k, false, &rq) == 200;
 	CHECK(taken == 0);
 	CHECK(http_parse(good, n, false, &rq) == 200 && rq.target == HTTP_EVENTS);
+
+	/* pixels: RGB8 copied; floats (out of range, on the rounding edges) as filter_quantise */
+	uint8_t rgb8[6] = { 0, 1, 127, 128, 254, 255 }, out[12];
+	http_to_rgb8(rgb8, 3, 2, out);
+	CHECK(memcmp(out, rgb8, 6) == 0);
+	static const float fv[12] = { -1.0f, 0.0f, 1.0f, 2.5f, 0.5f / 255, 0.499f / 255, 0.5f, 1.0f - 0.5f / 255,
+				      1e30f, 0.25f, 0.75f, 100.0f / 255 };
+	uint8_t fpx[sizeof fv];
+	memcpy(fpx, fv, sizeof fv);
+	http_to_rgb8(fpx, 12, 4, out);
+	for (int i = 0; i < 4; i++) {
+		uint8_t want[3];
+		filter_quantise((vec3){ fv[3 * i], fv[3 * i + 1], fv[3 * i + 2] }, want);
+		CHECK(memcmp(out + 3 * i, want, 3) == 0);
+	}
+	CHECK(out[0] == 0 && out[2] == 255 && out[3] == 255 && out[6] == 128 && out[11] == 100);
 
 	TEST_MAIN_END();
 }
