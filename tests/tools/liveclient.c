@@ -54,6 +54,7 @@ static double now(void)
 
 static double t_start;
 
+static void die(const char *fmt, ...) __attribute__((noreturn, format(printf, 1, 2)));
 static void die(const char *fmt, ...)
 {
 	va_list ap;
