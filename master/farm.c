@@ -25,6 +25,7 @@
 #include <unistd.h>
 
 #include "master/farm_int.h"
+#include "master/http.h"
 #include "master/interrupt.h"
 #include "master/journal.h"
 #include "proto/net.h"
@@ -515,6 +516,7 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	(void)proto_build_id(); /* the pixel probe, rendered now (a few ms), not in the first handshake */
 	int rc = EXIT_USAGE;
 	struct worker_addr *addrs = NULL;
+	struct http *view = NULL;
 	struct local L;
 	char err[600];
 
@@ -580,6 +582,8 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 		rc = EXIT_TOO_FEW;
 		goto out;
 	}
+	if (o->http && http_start(&f, n_threads, &view) < 0)
+		goto out;
 	/* the journal's tiles are done before anything is taken (after the other observers: they see them) */
 	if (jn && journal_attach(jn, &f) < 0)
 		goto out;
@@ -611,6 +615,7 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	observe_changes(&f); /* the last tiles, and those finished while stopping */
 	farm_bye(&f);
 	summary(&f);
+	http_finish(view); /* the viewers' last tiles, and --http-linger */
 	struct sched_stats st;
 	sched_stats(f.s, &st);
 	*finished = st.done;
@@ -632,6 +637,7 @@ out:
 		sched_stop(f.s);
 		tile_pool_join(f.pool);
 	}
+	http_free(view);
 	for (uint32_t i = 0; f.w && i < f.n_w; i++)
 		worker_free(&f.w[i]);
 	free(f.w);

@@ -62,6 +62,14 @@ static void usage(FILE *f)
 		"      --checkpoint S       write the journal every S seconds (default %g; 0: only when\n"
 		"                           the render stops: q, Esc, SIGINT, SIGTERM, SIGHUP)\n"
 		"      --keep-journal       keep OUT.journal after the render finished\n"
+		"      --http ADDR:PORT     serve a live view of the render (a web page) on ADDR:PORT;\n"
+		"                           loopback only unless --http-public; port 0 = any (see\n"
+		"                           --http-port-file; docs/live-view.md)\n"
+		"      --http-port-file FILE  write the --http port to FILE\n"
+		"      --http-public        allow --http beyond loopback (anyone who reaches it sees\n"
+		"                           the render)\n"
+		"      --http-linger S      after the render, serve the finished image S seconds more\n"
+		"                           before writing the output (q or Ctrl-C ends it)\n"
 		"  -h, --help               show this help\n"
 		"  -V, --version            show the version\n"
 		"\n"
@@ -85,12 +93,43 @@ static int parse_uint(const char *s, unsigned long max, unsigned long *out)
 	return 0;
 }
 
+/*
+ * --http and its companions, refused at once (before any parsing or
+ * tracing): a bad address, an address beyond loopback without
+ * --http-public, a companion without --http. 0, or -1 after saying why.
+ */
+static int check_http(const struct master_opts *o)
+{
+	if (!o->http) {
+		if (o->http_port_file || o->http_public || o->http_linger > 0) {
+			fprintf(stderr, "portray-master: --http-port-file, --http-public and --http-linger go with --http\n");
+			return -1;
+		}
+		return 0;
+	}
+	char host[NET_HOST_LEN], port[NET_PORT_LEN], err[300];
+	if (net_parse_hostport(o->http, host, port, err, sizeof err) < 0) {
+		fprintf(stderr, "portray-master: --http: %s\n", err);
+		return -1;
+	}
+	if (!o->http_public && !net_is_loopback(host)) {
+		fprintf(stderr,
+			"portray-master: --http %s would show the render to anyone who reaches it; give a loopback\n"
+			"portray-master: address (127.0.0.1:PORT) or, to mean it, --http-public\n",
+			o->http);
+		return -1;
+	}
+	return 0;
+}
+
 enum { OPT_CHECK = 256, OPT_TILE, OPT_SIZE, OPT_WFILE, OPT_SECRET, OPT_NOLOCAL, OPT_HB, OPT_AUDIT, OPT_ACCEPT,
        OPT_PORTFILE, OPT_INSECURE, OPT_FORMAT, OPT_NO_RTIME, OPT_RTIME,
        /* issue 12: progress, --min-workers, preview switches */
        OPT_PINTERVAL, OPT_MINW, OPT_JOINTO, OPT_REGION, OPT_PREVIEW, OPT_NOAA, OPT_NOSHADOWS, OPT_NOREFL,
        /* issue 12: checkpoint and resume */
-       OPT_RESUME, OPT_CHECKPOINT, OPT_KEEP_JOURNAL };
+       OPT_RESUME, OPT_CHECKPOINT, OPT_KEEP_JOURNAL,
+       /* issue 12: the live view */
+       OPT_HTTP, OPT_HTTP_PORTFILE, OPT_HTTP_PUBLIC, OPT_HTTP_LINGER };
 
 /* seconds in 0..max (zero_ok), or -1 */
 static int parse_seconds(const char *s, double max, bool zero_ok, double *out)
@@ -137,6 +176,10 @@ int main(int argc, char **argv)
 		{ "resume", no_argument, NULL, OPT_RESUME },
 		{ "checkpoint", required_argument, NULL, OPT_CHECKPOINT },
 		{ "keep-journal", no_argument, NULL, OPT_KEEP_JOURNAL },
+		{ "http", required_argument, NULL, OPT_HTTP },
+		{ "http-port-file", required_argument, NULL, OPT_HTTP_PORTFILE },
+		{ "http-public", no_argument, NULL, OPT_HTTP_PUBLIC },
+		{ "http-linger", required_argument, NULL, OPT_HTTP_LINGER },
 		{ "help", no_argument, NULL, 'h' },
 		{ "version", no_argument, NULL, 'V' },
 		{ NULL, 0, NULL, 0 },
@@ -263,6 +306,18 @@ int main(int argc, char **argv)
 			}
 			break;
 		}
+		case OPT_HTTP: o.http = optarg; break;
+		case OPT_HTTP_PORTFILE: o.http_port_file = optarg; break;
+		case OPT_HTTP_PUBLIC: o.http_public = true; break;
+		case OPT_HTTP_LINGER: {
+			char *end;
+			o.http_linger = strtod(optarg, &end);
+			if (end == optarg || *end || !(o.http_linger >= 0 && o.http_linger <= 86400)) {
+				fprintf(stderr, "portray-master: --http-linger wants seconds 0..86400, not '%s'\n", optarg);
+				return EXIT_USAGE;
+			}
+			break;
+		}
 		case 'h': usage(stdout); return 0;
 		case 'V': printf("portray-master %s (PortRAY 0.11 scene language)\n", PORTRAY_VERSION); return 0;
 		default: usage(stderr); return EXIT_USAGE;
@@ -293,5 +348,7 @@ int main(int argc, char **argv)
 			return EXIT_USAGE;
 		}
 	}
+	if (check_http(&o) < 0)
+		return EXIT_USAGE;
 	return o.check ? master_check(&o) : master_render(&o);
 }

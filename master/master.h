@@ -60,6 +60,11 @@ struct master_opts {
 	double checkpoint_s;   /* --checkpoint S: seconds between checkpoints, 0 = only when the render stops;
 				* main sets JOURNAL_INTERVAL_DEFAULT */
 	bool keep_journal;     /* --keep-journal: keep OUT.journal after a finished render */
+	/* the live view (master/http.h, docs/live-view.md) */
+	const char *http;          /* --http ADDR:PORT, or NULL */
+	const char *http_port_file; /* --http-port-file F: the --http port, written once listening */
+	bool http_public;          /* --http-public: --http beyond loopback */
+	double http_linger;        /* --http-linger S: serve the finished image S seconds more */
 };
 
 struct scene_camera;

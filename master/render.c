@@ -19,6 +19,7 @@
 #include "common/render.h"
 #include "common/tiles.h"
 #include "master/farm.h"
+#include "master/http.h"
 #include "master/interrupt.h"
 #include "master/journal.h"
 #include "master/master.h"
@@ -311,7 +312,7 @@ int master_render(const struct master_opts *o)
 	if (rc && rc != ERRLEVEL_LEVEL2 && !atomic_load(&cancel))
 		goto done; /* farm_render said why */
 	rc = 0;
-	double t_render = progress_now();
+	double t_render = progress_now() - http_lingered(); /* --http-linger is not render time */
 	bool partial = finished < total;
 	if (jn && journal_loaded(jn) && !o->quiet)
 		fprintf(stderr, "portray-master: resumed: %u tiles from the journal, %u traced, %llu in all\n",
