@@ -13,6 +13,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "common/bvh.h"
 #include "common/filter.h"
 #include "common/img.h"
 #include "common/parse.h"
@@ -223,6 +224,9 @@ int master_render(const struct master_opts *o)
 	rc = output_plan(o, &out, &out_alloc, &fmt);
 	if (rc)
 		goto done;
+	/* -j bounds every pool of threads: the tracers, the BVH build, the PNG encoder */
+	bvh_set_threads(o->threads > 0 ? (unsigned)o->threads : 0);
+	img_set_threads(o->threads > 0 ? (unsigned)o->threads : 0);
 	rc = parse_files(o->camera, o->scene, &s, &err);
 	if (rc) {
 		fprintf(stderr, "%s\n", err.msg);

@@ -19,6 +19,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "common/bvh.h"
 #include "common/render.h"
 #include "proto/net.h"
 #include "proto/proto.h"
@@ -170,6 +171,7 @@ static int parse_args(int argc, char **argv, struct wk_opts *o, const char **lis
 	}
 	if (o->threads == 0)
 		o->threads = render_ncpus();
+	bvh_set_threads((unsigned)o->threads); /* -j bounds scene builds too */
 	if (o->handshake_s == 0)
 		o->handshake_s = WK_HANDSHAKE_S;
 	o->cache_bytes = (uint64_t)cache_mb << 20;
