@@ -167,6 +167,23 @@ cp "$LJ" "$T/loc.journal"
 lrender "$SCENE" -o "$L" --size 96x64 --tile 8 --resume
 rc=$?
 refused "damaged header" "not a portray journal, or its header is damaged"
+# a --region render: another region's journal is refused; its own resumes to
+# the bytes of the region rendered in one go (a float format: 12 bytes a pixel)
+RG=10,4,90,60
+lrender "$SCENE" -o "$T/reg-ref.pfm" --size 96x64 --tile 8 --region $RG || fail "region render"
+lrender "$SCENE" -o "$T/reg.pfm" --size 96x64 --tile 8 --region $RG --keep-journal || fail "region render, journal kept"
+rm -f "$T/reg.pfm"
+cp "$T/reg.pfm.journal" "$T/reg.journal"
+lrender "$SCENE" -o "$T/reg.pfm" --size 96x64 --tile 8 --region 10,4,90,61 --resume
+rc=$?
+[ $rc -eq 65 ] && grep -q "another --region" "$T/l.log" || fail "another region: exit $rc: $(cat "$T/l.log")"
+# half the tiles: the journal cut after the header and a few records is still whole up to there
+size=$(wc -c <"$T/reg.journal")
+head -c $((112 + (size - 112) / 2)) "$T/reg.journal" >"$T/reg.pfm.journal"
+lrender "$SCENE" -o "$T/reg.pfm" --size 96x64 --tile 8 --region $RG --resume || fail "region resume: $(cat "$T/l.log")"
+grep -q "resumed: [1-9][0-9]* tiles from the journal, [1-9][0-9]* traced" "$T/l.log" || fail "region resume: $(cat "$T/l.log")"
+cmp "$T/reg-ref.pfm" "$T/reg.pfm" || fail "region resumed: image differs"
+echo "region: resumed to the same bytes"
 # --resume and standard output
 "$BIN/portray-master" "$SCENE" -o - --size 96x64 --resume >/dev/null 2>"$T/l.log"
 rc=$?

@@ -236,6 +236,11 @@ static void test_mismatch(void)
 	q.bpp = 12;
 	CHECK(open_j(&q, true, &j) == JOURNAL_MISMATCH);
 	char err[600];
+	/* a --region render's journal (its tiles are cut from the region's corner) */
+	q = p;
+	q.region[0] = 3, q.region[1] = 2, q.region[2] = 30, q.region[3] = 20;
+	CHECK(journal_open(path, &q, true, 0, &j, err, sizeof err) == JOURNAL_MISMATCH);
+	CHECK(strstr(err, "--region") != NULL);
 	q = p;
 	q.tile = SIDE * 2;
 	CHECK(journal_open(path, &q, true, 0, &j, err, sizeof err) == JOURNAL_MISMATCH);
