@@ -288,14 +288,14 @@ static double maxabs_nan(vec3 a) { return maxabs(a) + 0 * (a.x + a.y + a.z); }
  *     doubles), so each sum rounds to kcd ndotl, as it does with hl = 0;
  *  1: xm_pow must be called.
  * Glass (no diffuse, power 250: examples/exam_004) is mostly -1, diffuse
- * surfaces with high powers often 0. Powers below 16 on surfaces whose
+ * surfaces with high powers often 0. Powers below 32 on surfaces whose
  * diffuse weight kd is above 1/64 (weighted) rarely give either: the tests
  * would cost more than they save, so they are not tried.
  */
 static int highlight_needed(double rv, double power, double kd, vec3 in, vec3 kcd, vec3 kcs, double ndotl,
 			    double weight, double lim)
 {
-	if (!(power >= 16 || kd * weight < 1.0 / 64))
+	if (!(power >= 32 || kd * weight < 1.0 / 64))
 		return 1;
 	double ub = xm_pow_ub(rv, power);
 	double b = maxabs_nan(kcs) * ub, amax = maxabs_nan(kcd) * ndotl;
