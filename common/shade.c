@@ -274,6 +274,38 @@ static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp, uint32_t l
 	return v3(0, 0, 0);
 }
 
+/* The largest |channel|, or NaN when a channel is NaN or infinite (0 * it is NaN). */
+static double maxabs_nan(vec3 a) { return maxabs(a) + 0 * (a.x + a.y + a.z); }
+
+/*
+ * POW SKIP: whether direct() needs a sample's highlight hl = xm_pow(rv,
+ * power) to get its term in (kcd ndotl + kcs hl) to the bit. With ub >= hl
+ * (xm_pow_ub) and b = max|kcs| ub >= every channel's |kcs hl| (rounded
+ * products and sums of magnitudes are monotonic):
+ * -1: the term stays below the cut (maxabs(term) weight < lim) with every
+ *     channel at its largest, so direct() skips the sample whatever hl is;
+ *  0: b is below an eighth of an ulp of every channel's kcd ndotl (normal
+ *     doubles), so each sum rounds to kcd ndotl, as it does with hl = 0;
+ *  1: xm_pow must be called.
+ * Glass (no diffuse, power 250: examples/exam_004) is mostly -1, diffuse
+ * surfaces with high powers often 0. Powers below 32 on surfaces whose
+ * diffuse weight kd is above 1/64 (weighted) rarely give either: the tests
+ * would cost more than they save, so they are not tried.
+ */
+static int highlight_needed(double rv, double power, double kd, vec3 in, vec3 kcd, vec3 kcs, double ndotl,
+			    double weight, double lim)
+{
+	if (!(power >= 32 || kd * weight < 1.0 / 64))
+		return 1;
+	double ub = xm_pow_ub(rv, power);
+	double b = maxabs_nan(kcs) * ub, amax = maxabs_nan(kcd) * ndotl;
+	if (weight >= 0 && maxabs_nan(in) * (amax + b) * weight < lim)
+		return -1;
+	double x = fabs(kcd.x), y = fabs(kcd.y), z = fabs(kcd.z); /* finite when amax is */
+	double amin = (x < y ? (x < z ? x : z) : (y < z ? y : z)) * ndotl;
+	return amax < INFINITY && amin >= 0x1p-960 && b <= amin * 0x1p-56 ? 0 : 1;
+}
+
 /*
  * Direct lighting at p (shading normal n facing the viewer, geometric
  * normal ng on the same side, unit direction to the viewer v) for material
@@ -316,15 +348,21 @@ static vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, c
 			double ndotl = v3_dot(n, ldir);
 			if (ndotl <= 0)
 				continue;
-			double hl = 0; /* (R.V)^power */
-			if (want_spec) {
-				double rv = v3_dot(v3_sub(v3_scale(n, 2 * ndotl), ldir), v);
-				if (rv > 0)
-					hl = xm_pow(rv, m->spec_power);
-			}
 			vec3 in = l->colour;
 			if (l->fall_off != 0)
 				in = v3_scale(in, 1 / xm_pow(dist, l->fall_off));
+			double hl = 0; /* (R.V)^power */
+			if (want_spec) {
+				double rv = v3_dot(v3_sub(v3_scale(n, 2 * ndotl), ldir), v);
+				if (rv > 0) {
+					int need = highlight_needed(rv, m->spec_power, kd, in, kcd, kcs, ndotl, weight,
+								    cut * n_samples);
+					if (need < 0)
+						continue;
+					if (need)
+						hl = xm_pow(rv, m->spec_power);
+				}
+			}
 			vec3 term = v3_mul(in, v3_add(v3_scale(kcd, ndotl), v3_scale(kcs, hl)));
 			if (maxabs(term) * weight < cut * n_samples)
 				continue;

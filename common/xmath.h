@@ -11,6 +11,8 @@
 #define PORTRAY_XMATH_H
 
 #include <float.h>
+#include <math.h>
+#include <stdint.h>
 
 /*
  * Flags that change the value of double arithmetic would make this build's
@@ -45,5 +47,31 @@ double xm_acos(double x);
 double xm_exp(double x);
 double xm_log(double x);
 double xm_pow(double x, double y);
+/*
+ * A cheap upper bound on xm_pow(x, y) for 0 < x < 1 and 0 <= y < 2^64: a
+ * power of two, at most 4 e^(y w^3 / (3 (1 - w))) times x^y (w = 1 - x:
+ * tight near x = 1, where highlights are); INFINITY for any other argument.
+ * A caller that needs x^y only when it can matter skips xm_pow with it
+ * (common/shade.c; docs/maths.md). Inline: it is called where xm_pow was.
+ *
+ * log x = log(1 - w) = -(w + w^2/2 + w^3/3 + ...) <= -(w + w^2/2), so x^y
+ * <= 2^-t, t = y (w + w^2/2) / ln 2. The computed t has 6 roundings of
+ * positive terms (the constant's included: relative error below 2^-50), so
+ * tl = t (1 - 2^-48) is below the exact t, and with n = floor(tl), x^y <=
+ * 2^-n. 2^(1-n) then bounds any result within 2^51 ulps of x^y (xm_pow is
+ * within 1) and any subnormal one (n < 1000).
+ */
+static inline double xm_pow_ub(double x, double y)
+{
+	if (!(x > 0 && x < 1 && y >= 0 && y < 0x1p64))
+		return INFINITY;
+	double w = 1 - x;
+	double t = y * (w + 0.5 * (w * w)) * 0x1.71547652b82fep+0; /* 1/ln 2 rounded */
+	double tl = t * (1 - 0x1p-48);
+	if (tl >= 1000)
+		return 0x1p-999;
+	union { uint64_t u; double d; } b = { (uint64_t)(1023 + 1 - (int)tl) << 52 }; /* (int): floor, tl >= 0 */
+	return b.d;
+}
 
 #endif

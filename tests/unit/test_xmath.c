@@ -223,6 +223,54 @@ static void run2(const char *name, double (*ours)(double, double), double (*ref)
 	report(&s, bound_d, bound_ld);
 }
 
+/*
+ * xm_pow_ub: above xm_pow and above libm's long double powl (the exact
+ * value within its error) for 2^20 arguments in its domain (0 < x < 1,
+ * 0 <= y < 2^64; x near 1 and the powers of highlights most), at most 4
+ * e^(y w^3 / (3 (1 - w))) times xm_pow where that is normal (w = 1 - x),
+ * and INFINITY outside the domain.
+ */
+static void test_pow_ub(void)
+{
+	long bad = 0, loose = 0;
+	double worst = 0;
+	for (long i = 0; i < XM_N; i++) {
+		double x, y;
+		switch (i % 4) {
+		case 0: x = urand(0, 1); y = urand(0, 300); break;
+		case 1: x = 1 - logrand(-53, -1, 0); y = (double)(rnd64() % 2001); break;
+		case 2: x = logrand(-1074, 0, 0); y = logrand(-1074, 64, 0); break;
+		default: x = urand(0.5, 1); y = i & 4 ? logrand(-20, 20, 0) : urand(0, 2000); break;
+		}
+		if (!(x > 0 && x < 1))
+			continue;
+		double ub = xm_pow_ub(x, y), p = xm_pow(x, y);
+		if (!(p <= ub) || !(powl(x, y) <= ub)) {
+			if (bad++ < 5)
+				fprintf(stderr, "xm_pow_ub(%a, %a) = %a below xm_pow %a\n", x, y, ub, p);
+		}
+		double w = 1 - x, r = ub / p;
+		if (p > 0x1p-990) {
+			if (r > worst && x >= 0.9 && y <= 300)
+				worst = r;
+			if (!(r <= 4.001 * exp(y * w * w * w / (3 * (1 - w)))) && loose++ < 5)
+				fprintf(stderr, "xm_pow_ub(%a, %a) = %a: %g times xm_pow\n", x, y, ub, r);
+		}
+	}
+	printf("pow_ub %8d args  %ld below xm_pow  %ld looser than stated  max ub/xm_pow %.2f for x >= 0.9, y <= 300\n",
+	       XM_N, bad, loose, worst);
+	CHECK(bad == 0);
+	CHECK(loose == 0);
+	static const double outside[][2] = { { 0, 2 }, { -0.0, 2 }, { -0.5, 2 }, { 1, 2 }, { 1.5, 2 }, { INFINITY, 2 },
+					     { NAN, 2 }, { 0.5, -1 }, { 0.5, -0.0 }, { 0.5, INFINITY }, { 0.5, 0x1p64 },
+					     { 0.5, NAN } };
+	for (size_t i = 0; i < sizeof outside / sizeof outside[0]; i++)
+		CHECK(xm_pow_ub(outside[i][0], outside[i][1]) == INFINITY || (outside[i][1] == 0 && xm_pow_ub(outside[i][0], outside[i][1]) == 2));
+	CHECK(xm_pow_ub(0.5, 0) == 2);
+	CHECK(xm_pow_ub(0x1p-1074, 1) == 0.5); /* tight only near 1 */
+	CHECK(xm_pow_ub(0.5, 2000) == 0x1p-999);
+}
+
 static double sincos_s(double x)
 {
 	double s, c;
@@ -251,5 +299,6 @@ int main(void)
 	run1("log", xm_log, log, logl, gen_log, 1, 0.75);
 	run2("atan2", xm_atan2, atan2, atan2l, gen_atan2, 1, 0.75);
 	run2("pow", xm_pow, pow, powl, gen_pow, 1, 0.8);
+	test_pow_ub();
 	TEST_MAIN_END();
 }
