@@ -363,8 +363,8 @@ static inline __attribute__((always_inline)) bool sphere_roots(vec3 oc, vec3 d, 
 	double c = v3_dot(oc, oc) - r2;
 	double q = tc + (tc >= 0 ? h : -h); /* larger magnitude root */
 	double other = q != 0 ? (c / a) / q : 0;
-	*t0 = fmin(q, other);
-	*t1 = fmax(q, other);
+	*t0 = geom_fmin(q, other);
+	*t1 = geom_fmax(q, other);
 	return true;
 }
 
@@ -765,7 +765,7 @@ void geom_wray_init(struct geom_wray *w, vec3 o, vec3 d)
 
 vec3 accel_offset_point(vec3 p, vec3 ng, vec3 dir)
 {
-	double m = fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z)));
+	double m = geom_fmax(fabs(p.x), geom_fmax(fabs(p.y), fabs(p.z)));
 	double e = ACCEL_OFFSET_REL * (1 + m);
 	return v3_add(p, v3_scale(ng, v3_dot(dir, ng) < 0 ? -e : e));
 }
