@@ -539,8 +539,18 @@ static inline bool ref_occludes(const struct accel *A, const struct group *g, ui
 	}
 	case REF_INST:
 		return inst_occluded(A, &g->inst[i], r);
-	default:
-		break;
+	default: { /* an xprim: xprim_test's answer without a candidate, but CSG */
+		const struct geom_obj *go = g->xp[i].g;
+		if (go->kind == PRIM_CSG)
+			break;
+		vec3 o = r->o, d = r->d;
+		if (go->has_xform) {
+			o = m34_point(&go->inv, o);
+			d = m34_dir(&go->inv, d);
+		}
+		int part;
+		return geom_intersect(go, o, d, r->tmin, r->tmax, &t, &part);
+	}
 	}
 	struct cand c;
 	cand_init(&c);

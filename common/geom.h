@@ -127,6 +127,17 @@ struct geom_cross1 {
 };
 int geom_crossings(const struct geom_obj *g, vec3 o, vec3 d, struct geom_cross1 out[2], bool *inside0);
 
+/*
+ * fmin and fmax inline (the library's are calls, even at -O3): the other
+ * operand when one is NaN, else x < y ? x : y and x > y ? x : y. That is
+ * glibc's x86-64 fmin and fmax (minsd and maxsd behind a NaN test), signed
+ * zeros included: tests/unit/test_geom.c compares them on special values.
+ * (Other C libraries may order signed zeros differently; these do not
+ * depend on the library.)
+ */
+static inline double geom_fmin(double x, double y) { return x < y || y != y ? x : y; }
+static inline double geom_fmax(double x, double y) { return x > y || y != y ? x : y; }
+
 /* ---- watertight ray/triangle (Woop, Benthin, Wald 2013) ---------------- */
 
 struct geom_wray {
