@@ -491,8 +491,8 @@ static uint64_t mix64(uint64_t x)
 	return x ^ (x >> 31);
 }
 
-int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_len, double build_s,
-		const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, enum render_pixel px,
+int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_len, const uint8_t *scene_hash,
+		double build_s, const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, enum render_pixel px,
 		atomic_int *cancel, uint32_t *finished, struct journal *jn)
 {
 	struct farm f;
@@ -541,7 +541,8 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 		fprintf(stderr, "portray-master: the encoded scene (%zu bytes) is over the wire limit\n", scene_len);
 		goto out;
 	}
-	proto_scene_hash(scene, scene_len, f.hash);
+	_Static_assert(sizeof f.hash == JOURNAL_HASH_BYTES, "one scene hash for the wire and the journal");
+	memcpy(f.hash, scene_hash, sizeof f.hash);
 	if (o->region) /* render.c checked it is inside the image */
 		tiling_init_region(&f.tg, w, h, o->tile, o->rx0, o->ry0, o->rx1, o->ry1);
 	else

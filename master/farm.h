@@ -14,7 +14,8 @@
 struct journal;
 
 /*
- * Renders the encoded scene (scene_len bytes, proto_scene_encode) at w x h
+ * Renders the encoded scene (scene_len bytes, proto_scene_encode, whose
+ * proto_scene_hash is scene_hash: hashed once per render) at w x h
  * into image (w*h*render_pixel_bytes(px) bytes, pixels of type px as
  * render.h states them, rows top to bottom; with o->region only the
  * region's pixels are traced and written, the rest left as they were) on
@@ -42,8 +43,8 @@ struct journal;
  * journal (master/journal.h): its tiles are taken as done before anything
  * is traced, and what is stored from then on is checkpointed into it.
  */
-int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_len, double build_s,
-		const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, enum render_pixel px,
+int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_len, const uint8_t *scene_hash,
+		double build_s, const struct renderer *r, uint32_t w, uint32_t h, uint8_t *image, enum render_pixel px,
 		atomic_int *cancel, uint32_t *finished, struct journal *jn);
 
 #endif

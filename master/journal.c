@@ -619,14 +619,6 @@ static bool image_px(void *arg, uint32_t id, uint8_t *out)
 	return true;
 }
 
-int journal_sync(struct journal *j, const uint8_t *image)
-{
-	if (!j)
-		return 0;
-	struct image_src src = { j, image };
-	return journal_checkpoint(j, image_px, &src);
-}
-
 bool journal_close(struct journal *j, const uint8_t *image, bool finished, bool keep)
 {
 	if (!j)

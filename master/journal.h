@@ -117,9 +117,6 @@ uint32_t journal_preloaded(const struct journal *j);
  * Frees j (NULL: nothing). Returns whether a journal file is left.
  */
 bool journal_close(struct journal *j, const uint8_t *image, bool finished, bool keep);
-/* Writes the changes since the last checkpoint from image (as
- * journal_close does) while image is still as assembled. 0, or -1. */
-int journal_sync(struct journal *j, const uint8_t *image);
 /* The journal's file name (for messages). */
 const char *journal_path(const struct journal *j);
 

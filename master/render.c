@@ -164,23 +164,48 @@ static enum render_pixel pixel_for(enum img_format fmt)
 	return fmt == IMG_PNG || fmt == IMG_PPM ? RENDER_RGB8 : RENDER_RGBF32;
 }
 
-/* RENDER_RGBF32 pixels are little-endian floats on every host; the writers
- * take the host's floats (img.h): on a big-endian host, swap in place. */
-static void floats_to_host(uint8_t *p, size_t n_floats)
+static bool host_little_endian(void)
 {
 	const uint32_t one = 1;
 	uint8_t first;
 	memcpy(&first, &one, 1);
-	if (first == 1)
-		return; /* little-endian: they are the host's already */
-	for (size_t i = 0; i < n_floats; i++, p += 4) {
-		uint8_t t = p[0];
-		p[0] = p[3];
-		p[3] = t;
-		t = p[1];
-		p[1] = p[2];
-		p[2] = t;
-	}
+	return first == 1;
+}
+
+/*
+ * The pixels the writers get: the image itself, or (--region: a cropped
+ * file; RENDER_RGBF32 on a big-endian host: the writers take the host's
+ * floats, the image holds little-endian ones) a copy made so, in *copy
+ * (the caller frees it). The image stays as assembled: the journal may
+ * still read it. NULL when out of memory.
+ */
+static const uint8_t *output_pixels(const struct master_opts *o, const uint8_t *image, uint32_t w, uint32_t h,
+				    enum render_pixel px, uint32_t *ow, uint32_t *oh, uint8_t **copy)
+{
+	bool swap = px == RENDER_RGBF32 && !host_little_endian();
+	uint32_t x0 = o->region ? o->rx0 : 0, y0 = o->region ? o->ry0 : 0;
+	*ow = o->region ? o->rx1 - o->rx0 : w;
+	*oh = o->region ? o->ry1 - o->ry0 : h;
+	*copy = NULL;
+	if (!o->region && !swap)
+		return image;
+	size_t bpp = render_pixel_bytes(px), row = (size_t)*ow * bpp;
+	uint8_t *c = malloc(row * *oh);
+	if (!c)
+		return NULL;
+	for (uint32_t y = 0; y < *oh; y++)
+		memcpy(c + y * row, image + ((size_t)(y0 + y) * w + x0) * bpp, row);
+	if (swap)
+		for (uint8_t *p = c, *end = c + row * *oh; p < end; p += 4) {
+			uint8_t t = p[0];
+			p[0] = p[3];
+			p[3] = t;
+			t = p[1];
+			p[1] = p[2];
+			p[2] = t;
+		}
+	*copy = c;
+	return c;
 }
 
 /* The render stopped and left its journal beside out. */
@@ -214,7 +239,7 @@ int master_render(const struct master_opts *o)
 	memset(&err, 0, sizeof err);
 	int rc;
 	bool watching = false;
-	bool reshaped = false; /* image no longer as assembled (host floats, cropped) */
+	uint8_t *out_copy = NULL; /* the writers' pixels when not the image's (output_pixels) */
 	struct journal *jn = NULL;
 	bool written = false; /* the whole image is written: the journal can go */
 	double t0 = progress_now();
@@ -312,7 +337,7 @@ int master_render(const struct master_opts *o)
 	int threads = o->threads > 0 ? o->threads : render_ncpus();
 	bool farm = o->workers || o->workers_file || o->accept;
 	/* one loop for every render: without workers it drives the local threads alone */
-	rc = farm_render(o, enc, enc_len, t_build - t_parse, r, w, h, image, px, &cancel, &finished, jn);
+	rc = farm_render(o, enc, enc_len, jp.scene_hash, t_build - t_parse, r, w, h, image, px, &cancel, &finished, jn);
 	if (rc && rc != ERRLEVEL_LEVEL2 && !atomic_load(&cancel))
 		goto done; /* farm_render said why */
 	rc = 0;
@@ -336,22 +361,12 @@ int master_render(const struct master_opts *o)
 			 (unsigned long long)total);
 	}
 	struct img_text texts[4];
-	/* the journal's last tiles while the image is as assembled (the
-	 * writers want host floats and --region a cropped image) */
-	journal_sync(jn, image);
-	reshaped = px == RENDER_RGBF32 || o->region;
-	if (px == RENDER_RGBF32)
-		floats_to_host(image, (size_t)w * h * 3);
-	struct img_desc desc = { .w = w, .h = h, .type = px == RENDER_RGBF32 ? IMG_RGBF32 : IMG_RGB8,
-				 .pixels = image, .format = fmt, .text = texts };
-	if (o->region) {
-		/* a cropped file: the region's rows moved to the front, in place */
-		uint32_t rw = o->rx1 - o->rx0, rh = o->ry1 - o->ry0;
-		for (uint32_t y = 0; y < rh; y++)
-			memmove(image + (size_t)y * rw * bpp, image + ((size_t)(o->ry0 + y) * w + o->rx0) * bpp,
-				(size_t)rw * bpp);
-		desc.w = rw;
-		desc.h = rh;
+	struct img_desc desc = { .type = px == RENDER_RGBF32 ? IMG_RGBF32 : IMG_RGB8, .format = fmt, .text = texts };
+	desc.pixels = output_pixels(o, image, w, h, px, &desc.w, &desc.h, &out_copy);
+	if (!desc.pixels) {
+		fprintf(stderr, "portray-master: out of memory for the output image\n");
+		rc = ERRLEVEL_FATAL;
+		goto done;
 	}
 	desc.n_text = output_texts(o, t_render - t0, partial ? partial_why : NULL, texts, bufs);
 	if (img_write_opts(out, &desc) < 0) {
@@ -392,11 +407,12 @@ int master_render(const struct master_opts *o)
 		say_journal(out);
 done:
 	/* kept, with the last tiles, unless the image is written (e.g. every worker lost) */
-	if (journal_close(jn, reshaped ? NULL : image, written, o->keep_journal) && !written)
+	if (journal_close(jn, image, written, o->keep_journal) && !written)
 		say_journal(out);
 	if (watching)
 		interrupt_stop();
 	free(image);
+	free(out_copy);
 	free(out_alloc);
 	renderer_free(r);
 	scene_free(ds);
