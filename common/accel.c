@@ -25,7 +25,9 @@
  * groups holding those) sit in a list tested for every ray. The BVH is
  * binned SAH (bvh.c) collapsed to 4-wide nodes; traversal is iterative with
  * a fixed stack, nearest child first, and stops at the first hit for
- * accel_occluded. Instances recurse into their define's group (depth
+ * accel_occluded. Packets of four rays (accel_intersect4, accel_occluded4)
+ * share one walk of the root group's tree; a last-blocker hint
+ * (accel_occluded_hint) is tested before the tree. Instances recurse into their define's group (depth
  * bounded by LIM_DEFINE_DEPTH); the closest hit is completed (normal, uv,
  * mp, material) once per group, in the group's space, then carried out
  * through each instance's transform. In the root group, u, v and mp of
@@ -524,8 +526,22 @@ static inline __attribute__((always_inline)) bool ref_test(const struct accel *A
 static inline bool ref_occludes(const struct accel *A, const struct group *g, uint32_t ref, struct trace *r)
 {
 	uint32_t i = REF_IDX(ref);
-	if (REF_KIND(ref) == REF_INST)
+	double t;
+	switch (REF_KIND(ref)) { /* the common kinds without a candidate */
+	case REF_SPHERE:
+		return sphere_test(&g->sph[i], r, &t);
+	case REF_TRI: {
+		const struct gmesh *m = &g->mesh[g->tri[i].mesh];
+		const uint32_t *ix = tri_ix(m, g->tri[i].tri);
+		double b1, b2;
+		return geom_tri_hit_p(trace_wray(r), &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &t,
+				      &b1, &b2);
+	}
+	case REF_INST:
 		return inst_occluded(A, &g->inst[i], r);
+	default:
+		break;
+	}
 	struct cand c;
 	cand_init(&c);
 	double tmax = r->tmax;
@@ -600,10 +616,14 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 			const struct geom_obj *go = g->xp[i].g;
 			vec3 lp = go->has_xform ? m34_point(&go->inv, p) : p;
 			vec3 n;
-			/* spheres' and cylinders' mappings (atan2, asin) later, from mp */
-			bool lazy = go->kind == PRIM_SPHERE || go->kind == PRIM_CYLINDER;
+			/* spheres' and cylinders' mappings (atan2, asin) later, from mp;
+			 * planes', disks' and polygons' too (the ground plane is half
+			 * the hits of a mesh scene) */
+			bool lazy = go->kind == PRIM_SPHERE || go->kind == PRIM_CYLINDER || go->kind == PRIM_PLANE ||
+				    go->kind == PRIM_DISK || go->kind == PRIM_POLYGON;
 			if (lazy) {
-				n = geom_normal(go, lp, c->part);
+				/* geom_normal's value; a plane's, the common case, inline */
+				n = go->kind == PRIM_PLANE ? go->u.pl.n : geom_normal(go, lp, c->part);
 				h->u = h->v = 0;
 				h->surf_fn = surface_cb;
 				h->surf_kind = SURF_XPRIM;
@@ -896,19 +916,23 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
  * in each copy, since checking leaves' sizes in the common copy cost 1.5%
  * of a whole render). */
 static inline __attribute__((always_inline)) bool group_occluded_t(const struct accel *A, const struct group *g,
-								    struct trace *r, const bool chunked)
+								    struct trace *r, const bool chunked, uint32_t *who)
 {
 	for (uint32_t k = 0; k < g->n_unb; k++) {
 		if (cancel_poll_every(k)) /* CANCELLATION, as unb_hit */
 			return false;
-		if (ref_occludes(A, g, g->unb[k], r))
+		if (ref_occludes(A, g, g->unb[k], r)) {
+			*who = g->unb[k];
 			return true;
+		}
 	}
 	if (g->bvh.root_n) {
 		if (box_hit(g->bvh.root_b, g->center, r))
 			for (uint32_t k = 0; k < g->bvh.root_n; k++)
-				if (ref_occludes(A, g, group_ref(g, g->bvh.root_idx + k), r))
+				if (ref_occludes(A, g, group_ref(g, g->bvh.root_idx + k), r)) {
+					*who = group_ref(g, g->bvh.root_idx + k);
 					return true;
+				}
 		return false;
 	}
 	if (!g->bvh.n_nodes4)
@@ -931,8 +955,10 @@ static inline __attribute__((always_inline)) bool group_occluded_t(const struct 
 				n = ACCEL_LEAF_CHUNK;
 			}
 			for (uint32_t k = 0; k < n; k++)
-				if (ref_occludes(A, g, group_ref(g, idx + k), r))
+				if (ref_occludes(A, g, group_ref(g, idx + k), r)) {
+					*who = group_ref(g, idx + k);
 					return true;
+				}
 		} else {
 			const struct bvh4 *nd = &nodes[idx];
 			float tn[4];
@@ -964,10 +990,36 @@ static inline __attribute__((always_inline)) bool group_occluded_t(const struct 
 }
 
 /* Whether anything in g is hit in (r->tmin, r->tmax): group_occluded_t in
- * the copy g's leaves need. */
+ * the copy g's leaves need; on true *who is the reference of g that was hit. */
+static bool group_occluded_who(const struct accel *A, const struct group *g, struct trace *r, uint32_t *who)
+{
+	return g->big_leaf ? group_occluded_t(A, g, r, true, who) : group_occluded_t(A, g, r, false, who);
+}
+
 static bool group_occluded(const struct accel *A, const struct group *g, struct trace *r)
 {
-	return g->big_leaf ? group_occluded_t(A, g, r, true) : group_occluded_t(A, g, r, false);
+	uint32_t who;
+	return group_occluded_who(A, g, r, &who);
+}
+
+/* Whether ref names a reference of g (kind and index in range): a hint
+ * that does may be tested, whatever accel it came from. */
+static inline bool ref_valid(const struct group *g, uint32_t ref)
+{
+	uint32_t i = REF_IDX(ref);
+	switch (REF_KIND(ref)) {
+	case REF_SPHERE: return i < g->n_sph;
+	case REF_TRI: return i < g->n_tri;
+	case REF_XPRIM: return i < g->n_xp;
+	default: return ref != ACCEL_NO_HINT && i < g->n_inst;
+	}
+}
+
+/* The last-blocker hint's test (accel_occluded_hint): true when the
+ * reference it names blocks r. */
+static inline bool hint_occludes(const struct accel *A, const struct group *g, uint32_t hint, struct trace *r)
+{
+	return hint != ACCEL_NO_HINT && ref_valid(g, hint) && ref_occludes(A, g, hint, r);
 }
 
 /* ---- packets of four rays ------------------------------------------------------------ */
@@ -984,6 +1036,9 @@ static bool group_occluded(const struct accel *A, const struct group *g, struct 
  */
 struct ray4x {
 	__m128 o[3], inv_near[3], inv_far[3];
+	/* lane i's o, inv_near and inv_far broadcast to four lanes (one per
+	 * child): bvh_hit4 tests a node ray by ray, the four children at once */
+	__m128 lo[4][3], lnear[4][3], lfar[4][3];
 	double tscale[4];
 };
 
@@ -1002,6 +1057,126 @@ static inline float lanes_min(__m128 v)
 	v = _mm_min_ps(v, _mm_shuffle_ps(v, v, _MM_SHUFFLE(2, 3, 0, 1)));
 	v = _mm_min_ps(v, _mm_shuffle_ps(v, v, _MM_SHUFFLE(1, 0, 3, 2)));
 	return _mm_cvtss_f32(v);
+}
+
+/*
+ * TRIANGLE PRE-TEST ACROSS THE PACKET. Where the four rays share the
+ * watertight test's axis permutation (kx, ky, kz: neighbouring rays do),
+ * a leaf's triangle is first tested against the four at once in float:
+ * the same edge functions U, V, W as geom_tri_hit_p, from the vertices and
+ * origins rounded to float. A ray is rejected only where two of them have
+ * opposite signs by more than a margin that bounds the float result's
+ * distance from the double one; the double test then rejects too (its
+ * first test), so every ray not rejected is tested in double exactly as
+ * before and the hits stay bit for bit. The margin: with S the largest
+ * magnitude of the nine vertex components and the ray's origin (permuted),
+ * each of A, B, C minus the origin is within E1 = 2^-21 S of its double
+ * value (the roundings to float and the subtraction: 4 u S, u = 2^-24), the
+ * sheared a, b, c (|sx|, |sy| <= 1: kz is the dominant axis) within E2 =
+ * 2^-19 S (24 u S), and U = cx by - cy bx within E2 (|bx| + |by| + |cx| +
+ * |cy|) + 2 E2^2 + 2u (|cx by| + |cy bx|); the margin is twice that (the
+ * margin's own rounding and the double's, ~2^-52 relative) plus 2^-120 and
+ * floors of 2^-140 in E1 and E2 for subnormal floats. An infinite or NaN
+ * value anywhere makes a comparison false: no rejection.
+ */
+struct tri4 {
+	bool ok;   /* set up, and the four rays share kx, ky, kz */
+	int kx, ky, kz;
+	__m128 ox, oy, oz, sx, sy, so; /* per ray: origin, shear, max |origin| */
+};
+
+/* Sets up the pre-test for the packet (the rays' watertight set-up too). */
+static void tri4_init(struct tri4 *q, struct trace tr[4])
+{
+	float ox[4], oy[4], oz[4], sx[4], sy[4], so[4];
+	const struct geom_wray *w0 = trace_wray(&tr[0]);
+	q->ok = true;
+	q->kx = w0->kx, q->ky = w0->ky, q->kz = w0->kz;
+	for (int i = 0; i < 4; i++) {
+		const struct geom_wray *w = trace_wray(&tr[i]);
+		q->ok &= w->kx == q->kx && w->ky == q->ky && w->kz == q->kz;
+		ox[i] = (float)w->ox, oy[i] = (float)w->oy, oz[i] = (float)w->oz;
+		sx[i] = (float)w->sx, sy[i] = (float)w->sy;
+		float m = fabsf(ox[i]) > fabsf(oy[i]) ? fabsf(ox[i]) : fabsf(oy[i]);
+		so[i] = m > fabsf(oz[i]) ? m : fabsf(oz[i]);
+	}
+	q->ox = _mm_loadu_ps(ox), q->oy = _mm_loadu_ps(oy), q->oz = _mm_loadu_ps(oz);
+	q->sx = _mm_loadu_ps(sx), q->sy = _mm_loadu_ps(sy), q->so = _mm_loadu_ps(so);
+}
+
+static inline __m128 abs4(__m128 x) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), x); }
+
+/* The rays (bit i: ray i) that triangle abc certainly misses (TRIANGLE
+ * PRE-TEST); q->ok must hold. */
+static inline unsigned tri4_reject(const struct tri4 *q, const vec3 *a, const vec3 *b, const vec3 *c)
+{
+	const int kx = q->kx, ky = q->ky, kz = q->kz;
+	float v[9] = { (float)geom_comp(a, kx), (float)geom_comp(a, ky), (float)geom_comp(a, kz),
+		       (float)geom_comp(b, kx), (float)geom_comp(b, ky), (float)geom_comp(b, kz),
+		       (float)geom_comp(c, kx), (float)geom_comp(c, ky), (float)geom_comp(c, kz) };
+	float sv = 0;
+	for (int k = 0; k < 9; k++)
+		sv = fabsf(v[k]) > sv ? fabsf(v[k]) : sv; /* NaN: left out, but NaN below rejects nothing */
+	__m128 S = _mm_max_ps(q->so, _mm_set1_ps(sv));
+	__m128 Az = _mm_sub_ps(_mm_set1_ps(v[2]), q->oz), Bz = _mm_sub_ps(_mm_set1_ps(v[5]), q->oz),
+	       Cz = _mm_sub_ps(_mm_set1_ps(v[8]), q->oz);
+	__m128 ax = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[0]), q->ox), _mm_mul_ps(q->sx, Az));
+	__m128 ay = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[1]), q->oy), _mm_mul_ps(q->sy, Az));
+	__m128 bx = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[3]), q->ox), _mm_mul_ps(q->sx, Bz));
+	__m128 by = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[4]), q->oy), _mm_mul_ps(q->sy, Bz));
+	__m128 cx = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[6]), q->ox), _mm_mul_ps(q->sx, Cz));
+	__m128 cy = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[7]), q->oy), _mm_mul_ps(q->sy, Cz));
+	__m128 p1 = _mm_mul_ps(cx, by), p2 = _mm_mul_ps(cy, bx); /* U */
+	__m128 p3 = _mm_mul_ps(ax, cy), p4 = _mm_mul_ps(ay, cx); /* V */
+	__m128 p5 = _mm_mul_ps(bx, ay), p6 = _mm_mul_ps(by, ax); /* W */
+	__m128 U = _mm_sub_ps(p1, p2), V = _mm_sub_ps(p3, p4), W = _mm_sub_ps(p5, p6);
+	__m128 E2 = _mm_add_ps(_mm_mul_ps(S, _mm_set1_ps(0x1p-19f)), _mm_set1_ps(0x1p-140f));
+	__m128 two_e2 = _mm_add_ps(E2, E2), two_e2sq = _mm_mul_ps(two_e2, E2);
+	__m128 Aab = _mm_add_ps(abs4(ax), abs4(ay)), Bab = _mm_add_ps(abs4(bx), abs4(by)),
+	       Cab = _mm_add_ps(abs4(cx), abs4(cy));
+	const __m128 two_u = _mm_set1_ps(0x1p-23f), floor4 = _mm_set1_ps(0x1p-120f);
+	/* 2 [E2 (sum of |.|) + 2 E2^2 + 2u (|p| + |q|)] + 2^-120 */
+#define MARGIN(s1, s2, pa, pb)                                                                                   \
+	_mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(E2, _mm_add_ps(s1, s2)), two_e2sq),                 \
+					 _mm_mul_ps(two_u, _mm_add_ps(abs4(pa), abs4(pb)))),                        \
+			      _mm_set1_ps(2.0f)),                                                                   \
+		   floor4)
+	__m128 mU = MARGIN(Bab, Cab, p1, p2), mV = MARGIN(Aab, Cab, p3, p4), mW = MARGIN(Aab, Bab, p5, p6);
+#undef MARGIN
+	__m128 zero = _mm_setzero_ps();
+	__m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, _mm_sub_ps(zero, mU)), _mm_cmplt_ps(V, _mm_sub_ps(zero, mV))),
+			       _mm_cmplt_ps(W, _mm_sub_ps(zero, mW)));
+	__m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, mU), _mm_cmpgt_ps(V, mV)), _mm_cmpgt_ps(W, mW));
+	return (unsigned)_mm_movemask_ps(_mm_and_ps(neg, pos));
+}
+
+/* A leaf of n references from idx tested for the rays in lanes (two or
+ * more), reference by reference: triangles through the pre-test when the
+ * rays share their permutation (set up on the packet's first such leaf). */
+static inline __attribute__((always_inline)) void leaf4(const struct accel *A, const struct group *g,
+							struct trace tr[4], struct cand best[4], bool found[4],
+							uint32_t idx, uint32_t n, unsigned lanes, struct tri4 *q,
+							bool *q_ready)
+{
+	for (uint32_t k = 0; k < n; k++) {
+		uint32_t ref = group_ref(g, idx + k);
+		unsigned test = lanes;
+		if (REF_KIND(ref) == REF_TRI) {
+			if (!*q_ready) {
+				tri4_init(q, tr);
+				*q_ready = true;
+			}
+			if (q->ok) {
+				const struct gmesh *m = &g->mesh[g->tri[REF_IDX(ref)].mesh];
+				const uint32_t *ix = tri_ix(m, g->tri[REF_IDX(ref)].tri);
+				test &= ~tri4_reject(q, &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]]);
+			}
+		}
+		for (; test; test &= test - 1) {
+			int i = __builtin_ctz(test);
+			found[i] |= ref_test(A, g, ref, &tr[i], &best[i], false);
+		}
+	}
 }
 
 /*
@@ -1036,40 +1211,58 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 	uint32_t idx = 0, n = 0;
 	__m128 tcur = tmin4; /* the entry distances of the subtree at hand */
 	uint32_t polls = ACCEL_POLL_POPS;
+	struct tri4 q; /* TRIANGLE PRE-TEST, set up at the first leaf that needs it */
+	bool q_ready = false;
 	for (;;) {
 		if (n) {
-
 			/* the rays that meet the leaf, in front of their closest hit */
 			unsigned lanes = lanes_in_front(tcur, tmax4, inf4);
-			while (lanes) {
+			if (lanes & (lanes - 1)) { /* two or more: the triangle pre-test pays */
+				leaf4(A, g, tr, best, found, idx, n, lanes, &q, &q_ready);
+			} else if (lanes) {
 				int i = __builtin_ctz(lanes);
-				lanes &= lanes - 1;
 				for (uint32_t k = 0; k < n; k++)
 					found[i] |= ref_test(A, g, group_ref(g, idx + k), &tr[i], &best[i], false);
+			}
+			for (; lanes; lanes &= lanes - 1) {
+				int i = __builtin_ctz(lanes);
 				tmx[i] = box_tmax(tr[i].tmax * P->tscale[i]);
 			}
 			tmax4 = _mm_loadu_ps(tmx);
 		} else {
 			const struct bvh4 *nd = &nodes[idx];
 			const float *b = (const float *)(const void *)nd; /* rows as in node4_hit */
+			/* ray by ray, the four children in the lanes (node4_hit's
+			 * arithmetic, operand for operand), then transposed: e[c] is
+			 * child c's entry distance for each ray, +inf where it misses */
+			const __m128 nr[3] = { _mm_loadu_ps(b + near[0]), _mm_loadu_ps(b + near[1]),
+					       _mm_loadu_ps(b + near[2]) };
+			const __m128 fr[3] = { _mm_loadu_ps(b + far[0]), _mm_loadu_ps(b + far[1]),
+					       _mm_loadu_ps(b + far[2]) };
 			__m128 e[4];
-			float key[4];
 			int m = 0;
-			for (int c = 0; c < 4; c++) {
-				__m128 t0 = tmin4, t1 = tmax4;
-				for (int k = 0; k < 3; k++) {
-					__m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[near[k] + (uint32_t)c]), P->o[k]),
-							       P->inv_near[k]);
-					__m128 tf = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[far[k] + (uint32_t)c]), P->o[k]),
-							       P->inv_far[k]);
-					t0 = _mm_max_ps(t0, tn);
-					t1 = _mm_min_ps(t1, tf);
-				}
-				__m128 hit = _mm_cmple_ps(t0, t1);
-				e[c] = _mm_or_ps(_mm_and_ps(hit, t0), _mm_andnot_ps(hit, inf4));
-				m |= (_mm_movemask_ps(hit) != 0) << c;
-				key[c] = lanes_min(e[c]);
-			}
+#define RAY_NODE(i)                                                                                      \
+	do {                                                                                             \
+		__m128 t0 = _mm_shuffle_ps(tmin4, tmin4, _MM_SHUFFLE(i, i, i, i));                       \
+		__m128 t1 = _mm_shuffle_ps(tmax4, tmax4, _MM_SHUFFLE(i, i, i, i));                       \
+		for (int k = 0; k < 3; k++) {                                                            \
+			__m128 tn = _mm_mul_ps(_mm_sub_ps(nr[k], P->lo[i][k]), P->lnear[i][k]);          \
+			__m128 tf = _mm_mul_ps(_mm_sub_ps(fr[k], P->lo[i][k]), P->lfar[i][k]);           \
+			t0 = _mm_max_ps(t0, tn);                                                         \
+			t1 = _mm_min_ps(t1, tf);                                                         \
+		}                                                                                        \
+		__m128 hit = _mm_cmple_ps(t0, t1);                                                       \
+		e[i] = _mm_or_ps(_mm_and_ps(hit, t0), _mm_andnot_ps(hit, inf4));                         \
+		m |= _mm_movemask_ps(hit);                                                               \
+	} while (0)
+			RAY_NODE(0);
+			RAY_NODE(1);
+			RAY_NODE(2);
+			RAY_NODE(3);
+#undef RAY_NODE
+			float key[4]; /* each child's nearest entry over the rays */
+			_mm_storeu_ps(key, _mm_min_ps(_mm_min_ps(e[0], e[1]), _mm_min_ps(e[2], e[3])));
+			_MM_TRANSPOSE4_PS(e[0], e[1], e[2], e[3]);
 			if (m) { /* nearest first; the others pushed farthest first */
 				int cs[4], k = 0;
 				for (int c = 0; c < 4; c++) {
@@ -1134,6 +1327,11 @@ static void group_hit4(const struct accel *A, const struct group *g, struct trac
 		P.o[k] = _mm_loadu_ps(o[k]);
 		P.inv_near[k] = _mm_loadu_ps(inv_near[k]);
 		P.inv_far[k] = _mm_loadu_ps(inv_far[k]);
+		for (int i = 0; i < 4; i++) {
+			P.lo[i][k] = _mm_set1_ps(o[k][i]);
+			P.lnear[i][k] = _mm_set1_ps(inv_near[k][i]);
+			P.lfar[i][k] = _mm_set1_ps(inv_far[k][i]);
+		}
 	}
 	switch (oct) { /* one copy of the loop per octant, as group_hit */
 	case 0: bvh_hit4(A, g, tr, best, found, &P, 0); break;
@@ -1150,6 +1348,168 @@ static void group_hit4(const struct accel *A, const struct group *g, struct trac
 		if (found[i])
 			finish(A, g, &tr[i], &best[i], &h[i]);
 	}
+}
+
+/*
+ * The any-hit packet traversal of g's bounded references for the rays
+ * (lanes) in *active: a subtree is visited when an active ray may hit it
+ * (children in slot order, as group_occluded_t), each stack entry keeps
+ * the lanes that met its box, and a leaf's references are each tested
+ * against those of its lanes still active. A ray leaves *active at its
+ * first blocker (*hint then names it); the walk ends when no ray is left.
+ * Every ray tests what group_occluded_t would let it test, perhaps more:
+ * anything hit blocks, so its answer is the same.
+ */
+static inline __attribute__((always_inline)) void bvh_occluded4(const struct accel *A, const struct group *g,
+								struct trace tr[4], unsigned *active, uint32_t *hint,
+								const struct ray4x *P, const uint32_t oct)
+{
+	const struct bvh4 *nodes = g->bvh.nodes;
+	const uint32_t near[3] = { 12 * (oct & 1), 4 + 12 * (oct >> 1 & 1), 8 + 12 * (oct >> 2 & 1) };
+	const uint32_t far[3] = { 12 * (~oct & 1), 4 + 12 * (~oct >> 1 & 1), 8 + 12 * (~oct >> 2 & 1) };
+	float tmn[4], tmx[4];
+	for (int i = 0; i < 4; i++) {
+		tmn[i] = box_tmin(tr[i].tmin * P->tscale[i]);
+		tmx[i] = box_tmax(tr[i].tmax * P->tscale[i]);
+	}
+	const __m128 tmin4 = _mm_loadu_ps(tmn), tmax4 = _mm_loadu_ps(tmx);
+	struct {
+		uint32_t idx, n;
+		unsigned lanes; /* the rays that met the subtree's box */
+	} stack[3 * BVH_MAX_DEPTH + 4];
+	int sp = 0;
+	unsigned act = *active, lanes = act;
+	uint32_t idx = 0, n = 0;
+	uint32_t polls = ACCEL_POLL_POPS;
+	for (;;) {
+		if (n) {
+			for (uint32_t k = 0; k < n && (lanes &= act); k++) {
+				uint32_t ref = group_ref(g, idx + k);
+				for (unsigned l = lanes; l; l &= l - 1) {
+					int i = __builtin_ctz(l);
+					if (ref_occludes(A, g, ref, &tr[i])) {
+						act &= ~(1u << i);
+						*hint = ref;
+					}
+				}
+			}
+			if (!act)
+				break;
+		} else {
+			const struct bvh4 *nd = &nodes[idx];
+			const float *b = (const float *)(const void *)nd; /* rows as in node4_hit */
+			unsigned m[4];
+			for (int c = 0; c < 4; c++) {
+				__m128 t0 = tmin4, t1 = tmax4;
+				for (int k = 0; k < 3; k++) {
+					__m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[near[k] + (uint32_t)c]), P->o[k]),
+							       P->inv_near[k]);
+					__m128 tf = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[far[k] + (uint32_t)c]), P->o[k]),
+							       P->inv_far[k]);
+					t0 = _mm_max_ps(t0, tn);
+					t1 = _mm_min_ps(t1, tf);
+				}
+				m[c] = (unsigned)_mm_movemask_ps(_mm_cmple_ps(t0, t1)) & act;
+			}
+			int first = -1;
+			for (int c = 3; c >= 0; c--) {
+				if (!m[c])
+					continue;
+				if (first >= 0) {
+					stack[sp].idx = nd->idx[first];
+					stack[sp].n = nd->n[first];
+					stack[sp++].lanes = m[first];
+				}
+				first = c;
+			}
+			if (first >= 0) {
+				idx = nd->idx[first];
+				n = nd->n[first];
+				lanes = m[first];
+				continue;
+			}
+		}
+		if (__builtin_expect(--polls == 0, 0)) { /* CANCELLATION, as bvh_hit */
+			polls = ACCEL_POLL_POPS;
+			if (cancel_poll())
+				break;
+		}
+		/* pop the next subtree some active ray meets */
+		for (;;) {
+			if (sp == 0)
+				goto out;
+			sp--;
+			if (stack[sp].lanes & act)
+				break;
+		}
+		idx = stack[sp].idx;
+		n = stack[sp].n;
+		lanes = stack[sp].lanes;
+	}
+out:
+	*active = act;
+}
+
+/* The four rays' box constants (struct ray4x) in group g's frame. */
+static void ray4x_init(struct ray4x *P, const struct trace tr[4], const struct group *g)
+{
+	float o[3][4], inv_near[3][4], inv_far[3][4];
+	for (int i = 0; i < 4; i++) {
+		struct ray_box q;
+		ray_box_init(&q, &tr[i], g->center);
+		for (int k = 0; k < 3; k++) {
+			o[k][i] = q.o[k];
+			inv_near[k][i] = q.inv_near[k];
+			inv_far[k][i] = q.inv_far[k];
+		}
+		P->tscale[i] = q.tscale;
+	}
+	for (int k = 0; k < 3; k++) {
+		P->o[k] = _mm_loadu_ps(o[k]);
+		P->inv_near[k] = _mm_loadu_ps(inv_near[k]);
+		P->inv_far[k] = _mm_loadu_ps(inv_far[k]);
+	}
+}
+
+/* accel_occluded4's packet query in g (g->bvh.n_nodes4, no big leaves) for
+ * four rays of one octant: unbounded references and the hint ray by ray,
+ * then the tree for the rays not yet blocked. */
+static void group_occluded4(const struct accel *A, const struct group *g, struct trace tr[4], uint32_t oct,
+			    bool occ[4], uint32_t *hint)
+{
+	unsigned active = 0;
+	for (int i = 0; i < 4; i++) {
+		bool blocked = false;
+		for (uint32_t k = 0; k < g->n_unb && !blocked; k++) {
+			if (cancel_poll_every(k)) /* CANCELLATION, as unb_hit */
+				break;
+			if (ref_occludes(A, g, g->unb[k], &tr[i])) {
+				blocked = true;
+				*hint = g->unb[k];
+			}
+		}
+		if (!blocked)
+			blocked = hint_occludes(A, g, *hint, &tr[i]);
+		active |= (unsigned)!blocked << i;
+	}
+	if (active) {
+		struct ray4x P;
+		ray4x_init(&P, tr, g);
+		switch (oct) { /* one copy of the loop per octant, as group_hit */
+		case 0: bvh_occluded4(A, g, tr, &active, hint, &P, 0); break;
+		case 1: bvh_occluded4(A, g, tr, &active, hint, &P, 1); break;
+		case 2: bvh_occluded4(A, g, tr, &active, hint, &P, 2); break;
+		case 3: bvh_occluded4(A, g, tr, &active, hint, &P, 3); break;
+		case 4: bvh_occluded4(A, g, tr, &active, hint, &P, 4); break;
+		case 5: bvh_occluded4(A, g, tr, &active, hint, &P, 5); break;
+		case 6: bvh_occluded4(A, g, tr, &active, hint, &P, 6); break;
+		default: bvh_occluded4(A, g, tr, &active, hint, &P, 7); break;
+		}
+	}
+	for (int i = 0; i < 4; i++)
+		occ[i] = !(active >> i & 1);
+	if (active == 15)
+		*hint = ACCEL_NO_HINT; /* as accel_occluded_hint */
 }
 #endif
 
@@ -1214,6 +1574,40 @@ bool accel_occluded(const struct accel *a, const struct ray *r)
 	struct trace t;
 	trace_init(&t, r->o, r->d, ray_tmin(r), r->tmax);
 	return group_occluded(a, a->root, &t);
+}
+
+bool accel_occluded_hint(const struct accel *a, const struct ray *r, uint32_t *hint)
+{
+	if (!a->root || !ray_ok(r))
+		return false;
+	struct trace t;
+	trace_init(&t, r->o, r->d, ray_tmin(r), r->tmax);
+	if (hint_occludes(a, a->root, *hint, &t))
+		return true;
+	if (group_occluded_who(a, a->root, &t, hint))
+		return true;
+	*hint = ACCEL_NO_HINT; /* a lit neighbour is likely lit too: no test next time */
+	return false;
+}
+
+void accel_occluded4(const struct accel *a, const struct ray r[4], bool occ[4], uint32_t *hint)
+{
+#if defined(__SSE2__)
+	const struct group *g = a->root;
+	bool packet = g && !g->bvh.root_n && g->bvh.n_nodes4 && !g->big_leaf;
+	uint32_t oct = ray_octant(r[0].d);
+	for (int i = 0; i < 4 && packet; i++)
+		packet = ray_ok(&r[i]) && ray_octant(r[i].d) == oct;
+	if (packet) {
+		struct trace tr[4];
+		for (int i = 0; i < 4; i++)
+			trace_init(&tr[i], r[i].o, r[i].d, ray_tmin(&r[i]), r[i].tmax);
+		group_occluded4(a, g, tr, oct, occ, hint);
+		return;
+	}
+#endif
+	for (int i = 0; i < 4; i++) /* rays of different octants, a root without a tree */
+		occ[i] = accel_occluded_hint(a, &r[i], hint);
 }
 
 void accel_get_stats(const struct accel *a, struct accel_stats *st) { *st = a->st; }

@@ -105,6 +105,26 @@ static inline void accel_hit_surface(const struct accel *a, struct hit *h)
 /* True if anything is hit in (r->tmin, r->tmax): early exit, for shadow rays. */
 bool accel_occluded(const struct accel *a, const struct ray *r);
 
+/* "No blocker remembered" for the hints below. */
+#define ACCEL_NO_HINT UINT32_MAX
+/*
+ * accel_occluded with a last-blocker hint: *hint names an object part of
+ * the root level that blocked an earlier ray (ACCEL_NO_HINT: none), which
+ * is tested before the tree; on "occluded" *hint names what blocked this
+ * ray. The answer is accel_occluded's whatever *hint holds (a hint from
+ * another accel only costs a test): anything hit in (tmin, tmax) blocks.
+ * Keep one hint per thread and light: neighbouring shadow rays toward one
+ * light tend to be blocked by the same object. Thread-safe.
+ */
+bool accel_occluded_hint(const struct accel *a, const struct ray *r, uint32_t *hint);
+/*
+ * accel_occluded_hint for four rays at once (occ[i] is what
+ * accel_occluded(a, &r[i]) gives), sharing one hint: faster when the rays
+ * are neighbours, as the shadow rays of a 2x2 block of pixels toward one
+ * point light are. Thread-safe.
+ */
+void accel_occluded4(const struct accel *a, const struct ray r[4], bool occ[4], uint32_t *hint);
+
 /*
  * Start point for a secondary ray leaving a hit at p (geometric normal ng)
  * in direction dir: p moved off the surface along ng, to the side dir

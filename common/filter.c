@@ -155,6 +155,7 @@ struct walk {
 	const struct filter_chain *fc;
 	uint32_t sx, sy;   /* seed position */
 	filter_trace_fn fn;
+	filter_trace4_fn fn4; /* NULL: every ray through fn */
 	void *arg;
 	uint64_t rays;
 };
@@ -165,6 +166,56 @@ static uint64_t seed_of(uint32_t x, uint32_t y, uint64_t s)
 	return (s >> 32) ? rng_derive(seed, s >> 32) : seed;
 }
 
+/* The eye ray of a sample that every layer has multiplied. */
+static struct ray sample_ray(const struct filter_chain *fc, const struct sample *smp)
+{
+	return smp->lens ? cam_lens_ray(&fc->cam, smp->px, smp->py, smp->lu, smp->lv, smp->focal)
+			 : cam_ray(&fc->cam, smp->px, smp->py);
+}
+
+/* Sample k of n of super-sample layer f from smp. */
+static struct sample grid_sample(const struct scene_filter *f, struct sample smp, uint64_t n, uint64_t k)
+{
+	struct sample c = smp;
+	c.s = smp.s * n + k;
+	uint64_t a = k % (uint64_t)f->x_samples, b = k / (uint64_t)f->x_samples;
+	c.px += ((double)a + 0.5) / f->x_samples - 0.5;
+	c.py += ((double)b + 0.5) / f->y_samples - 0.5;
+	return c;
+}
+
+/*
+ * expand() of a super-sample layer that is the last one, four samples a
+ * packet through w->fn4: the same rays and seeds, the colours summed in
+ * the same order with the same weight (1), so the same mean bit for bit.
+ */
+static vec3 expand_grid4(struct walk *w, const struct scene_filter *f, struct sample smp)
+{
+	uint64_t n = layer_count(f);
+	vec3 sum = v3(0, 0, 0);
+	double wsum = 0;
+	for (uint64_t k0 = 0; k0 < n; k0 += 4) {
+		if (cancel_poll()) /* CANCELLATION: the samples left are skipped */
+			break;
+		struct ray r[4];
+		uint64_t seed[4];
+		int m = 0;
+		for (uint64_t k = k0; k < n && m < 4; k++, m++) {
+			struct sample c = grid_sample(f, smp, n, k);
+			r[m] = sample_ray(w->fc, &c);
+			seed[m] = seed_of(w->sx, w->sy, c.s);
+		}
+		vec3 v[4];
+		w->fn4(w->arg, r, seed, m, v);
+		w->rays += (uint64_t)m;
+		for (int j = 0; j < m; j++) {
+			sum = v3_add(sum, v3_scale(v[j], 1.0));
+			wsum += 1.0;
+		}
+	}
+	return wsum > 0 ? v3_scale(sum, 1.0 / wsum) : v3(0, 0, 0);
+}
+
 /* Colour of sample smp after layers [layer, n_layers) have multiplied it. */
 static vec3 expand(struct walk *w, int layer, struct sample smp)
 {
@@ -172,12 +223,13 @@ static vec3 expand(struct walk *w, int layer, struct sample smp)
 	if (cancel_poll()) /* CANCELLATION: a wrong colour, never used */
 		return v3(0, 0, 0);
 	if (layer == fc->n_layers) {
-		struct ray r = smp.lens ? cam_lens_ray(&fc->cam, smp.px, smp.py, smp.lu, smp.lv, smp.focal)
-					: cam_ray(&fc->cam, smp.px, smp.py);
+		struct ray r = sample_ray(fc, &smp);
 		w->rays++;
 		return w->fn(w->arg, &r, seed_of(w->sx, w->sy, smp.s));
 	}
 	const struct scene_filter *f = &fc->layers[layer];
+	if (w->fn4 && layer == fc->n_layers - 1 && f->kind == FILTER_SUPERSAMPLE)
+		return expand_grid4(w, f, smp);
 	uint64_t n = layer_count(f);
 	vec3 sum = v3(0, 0, 0);
 	double wsum = 0;
@@ -188,9 +240,7 @@ static vec3 expand(struct walk *w, int layer, struct sample smp)
 		c.s = smp.s * n + k;
 		double weight = 1.0;
 		if (f->kind == FILTER_SUPERSAMPLE) {
-			uint64_t a = k % (uint64_t)f->x_samples, b = k / (uint64_t)f->x_samples;
-			c.px += ((double)a + 0.5) / f->x_samples - 0.5;
-			c.py += ((double)b + 0.5) / f->y_samples - 0.5;
+			c = grid_sample(f, smp, n, k);
 		} else {
 			/* uniform point in a disk of radius R: r = R sqrt(u1), angle 2 pi u2 */
 			uint64_t rs = rng_derive(seed_of(w->sx, w->sy, c.s), FILTER_RNG_TAG + (uint64_t)layer);
@@ -219,7 +269,7 @@ static vec3 expand(struct walk *w, int layer, struct sample smp)
 vec3 filter_point(const struct filter_chain *fc, double px, double py, uint32_t sx, uint32_t sy,
 		  filter_trace_fn fn, void *arg, uint64_t *rays)
 {
-	struct walk w = { fc, sx, sy, fn, arg, 0 };
+	struct walk w = { fc, sx, sy, fn, NULL, arg, 0 };
 	struct sample smp = { px, py, 0, 0, 0, 0, 0 };
 	vec3 v = expand(&w, 0, smp);
 	if (rays)
@@ -271,6 +321,19 @@ struct adapt {
 	uint32_t grid;     /* sub-pixel grid cells per pixel side: 2^max_depth */
 };
 
+/* The corner cache's slot for shared corner (x, y), or NULL (no cache, or
+ * a corner inside a pixel, which no other pixel asks for). */
+static struct corner *corner_slot(struct adapt *a, uint32_t x, uint32_t y)
+{
+	struct filter_scratch *sc = a->scratch;
+	int shared = (x & (a->grid - 1)) == 0 || (y & (a->grid - 1)) == 0;
+	if (!shared || !sc || !sc->n)
+		return NULL;
+	/* slot = hash scaled into [0, n) by a multiply, not a division */
+	uint64_t hsh = rng_mix((uint64_t)x << 32 | y) >> 32;
+	return &sc->cache[(hsh * sc->n) >> 32];
+}
+
 /*
  * Colour at grid corner (x, y): the corner cache holds corners on pixel edges,
  * the only ones another pixel can share; a corner's colour does not depend on
@@ -278,16 +341,9 @@ struct adapt {
  */
 static vec3 corner(struct adapt *a, uint32_t x, uint32_t y)
 {
-	struct filter_scratch *sc = a->scratch;
-	int shared = (x & (a->grid - 1)) == 0 || (y & (a->grid - 1)) == 0;
-	struct corner *e = NULL;
-	if (shared && sc && sc->n) {
-		/* slot = hash scaled into [0, n) by a multiply, not a division */
-		uint64_t hsh = rng_mix((uint64_t)x << 32 | y) >> 32;
-		e = &sc->cache[(hsh * sc->n) >> 32];
-		if (e->used && e->x == x && e->y == y)
-			return e->c;
-	}
+	struct corner *e = corner_slot(a, x, y);
+	if (e && e->used && e->x == x && e->y == y)
+		return e->c;
 	a->w.sx = x;
 	a->w.sy = y;
 	struct sample smp = { (double)x / a->grid, (double)y / a->grid, 0, 0, 0, 0, 0 };
@@ -299,6 +355,64 @@ static vec3 corner(struct adapt *a, uint32_t x, uint32_t y)
 		e->used = 1;
 	}
 	return v;
+}
+
+/*
+ * corner() of n <= 5 corners (x[i], y[i]) in order, the ones not cached
+ * traced four at a time through fn4 (adaptive with nothing layered on it,
+ * and fn4 given; else corner() one by one). The cache ends as corner()
+ * in turn would leave it, and a corner counts as cached exactly when it
+ * would have: a slot that an earlier corner of the batch fills is a miss
+ * for a later one (so *rays is the same too).
+ */
+static void corners(struct adapt *a, int n, const uint32_t x[], const uint32_t y[], vec3 out[])
+{
+	if (!a->w.fn4 || a->w.fc->n_layers) {
+		for (int i = 0; i < n; i++)
+			out[i] = corner(a, x[i], y[i]);
+		return;
+	}
+	struct corner *e[5];
+	int miss[5], n_miss = 0;
+	for (int i = 0; i < n; i++) {
+		e[i] = corner_slot(a, x[i], y[i]);
+		bool filled = false; /* by an earlier miss of this batch */
+		for (int j = 0; j < n_miss && e[i]; j++)
+			filled |= e[miss[j]] == e[i];
+		if (e[i] && !filled && e[i]->used && e[i]->x == x[i] && e[i]->y == y[i])
+			out[i] = e[i]->c;
+		else
+			miss[n_miss++] = i;
+	}
+	if (n_miss == 1) { /* nothing to trace together: corner()'s lookup misses again */
+		out[miss[0]] = corner(a, x[miss[0]], y[miss[0]]);
+		return;
+	}
+	const struct filter_chain *fc = a->w.fc;
+	for (int j0 = 0; j0 < n_miss; j0 += 4) {
+		int m = n_miss - j0 < 4 ? n_miss - j0 : 4;
+		struct ray r[4];
+		uint64_t seed[4];
+		vec3 v[4] = { { 0, 0, 0 }, { 0, 0, 0 }, { 0, 0, 0 }, { 0, 0, 0 } };
+		for (int j = 0; j < m; j++) { /* expand()'s last layer, as corner() calls it */
+			int i = miss[j0 + j];
+			r[j] = cam_ray(&fc->cam, (double)x[i] / a->grid, (double)y[i] / a->grid);
+			seed[j] = seed_of(x[i], y[i], 0);
+		}
+		if (!cancel_poll()) /* CANCELLATION: black, a wrong colour never used */
+			a->w.fn4(a->w.arg, r, seed, m, v);
+		a->w.rays += (uint64_t)m;
+		for (int j = 0; j < m; j++) {
+			int i = miss[j0 + j];
+			out[i] = v[j];
+			if (e[i]) {
+				e[i]->x = x[i];
+				e[i]->y = y[i];
+				e[i]->c = v[j];
+				e[i]->used = 1;
+			}
+		}
+	}
 }
 
 /* Clamps to [0,1]; NaN becomes 0. Comparisons, not fmin/fmax: those are
@@ -326,8 +440,11 @@ static vec3 adapt_square(struct adapt *a, uint32_t x, uint32_t y, uint32_t size,
 	if (depth > 0 && size >= 2 &&
 	    (cdiff(tl, tr) > thr || cdiff(bl, br) > thr || cdiff(tl, bl) > thr || cdiff(tr, br) > thr)) {
 		uint32_t h = size / 2;
-		vec3 t = corner(a, x + h, y), l = corner(a, x, y + h), m = corner(a, x + h, y + h);
-		vec3 r = corner(a, x + size, y + h), b = corner(a, x + h, y + size);
+		const uint32_t cx[5] = { x + h, x, x + h, x + size, x + h };
+		const uint32_t cy[5] = { y, y + h, y + h, y + h, y + size };
+		vec3 cv[5];
+		corners(a, 5, cx, cy, cv);
+		vec3 t = cv[0], l = cv[1], m = cv[2], r = cv[3], b = cv[4];
 		double nt = thr * a->w.fc->base.relax;
 		vec3 s = adapt_square(a, x, y, h, tl, t, l, m, depth - 1, nt);
 		s = v3_add(s, adapt_square(a, x + h, y, h, t, tr, m, r, depth - 1, nt));
@@ -354,15 +471,29 @@ void filter_eye_ray(const struct filter_chain *fc, uint32_t x, uint32_t y, struc
 vec3 filter_pixel(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x,
 		  uint32_t y, filter_trace_fn fn, void *arg, uint64_t *rays)
 {
-	if (fc->base.kind != FILTER_ADAPTIVE)
-		return filter_point(fc, x + 0.5, y + 0.5, x, y, fn, arg, rays);
+	return filter_pixel4(fc, scratch, x, y, fn, NULL, arg, rays);
+}
+
+vec3 filter_pixel4(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x, uint32_t y,
+		   filter_trace_fn fn, filter_trace4_fn fn4, void *arg, uint64_t *rays)
+{
+	if (fc->base.kind != FILTER_ADAPTIVE) {
+		struct walk w = { fc, x, y, fn, fn4, arg, 0 };
+		struct sample smp = { x + 0.5, y + 0.5, 0, 0, 0, 0, 0 }; /* filter_point's */
+		vec3 v = expand(&w, 0, smp);
+		if (rays)
+			*rays += w.rays;
+		return v;
+	}
 	struct adapt a;
-	a.w = (struct walk){ fc, 0, 0, fn, arg, 0 };
+	a.w = (struct walk){ fc, 0, 0, fn, fn4, arg, 0 };
 	a.scratch = scratch;
 	a.grid = 1u << fc->base.max_depth;
 	uint32_t g = a.grid, x0 = x * g, y0 = y * g;
-	vec3 tl = corner(&a, x0, y0), tr = corner(&a, x0 + g, y0);
-	vec3 bl = corner(&a, x0, y0 + g), br = corner(&a, x0 + g, y0 + g);
+	const uint32_t cx[4] = { x0, x0 + g, x0, x0 + g }, cy[4] = { y0, y0, y0 + g, y0 + g };
+	vec3 cv[4];
+	corners(&a, 4, cx, cy, cv);
+	vec3 tl = cv[0], tr = cv[1], bl = cv[2], br = cv[3];
 	vec3 v = adapt_square(&a, x0, y0, g, tl, tr, bl, br, fc->base.max_depth, fc->base.threshold);
 	if (rays)
 		*rays += a.w.rays;

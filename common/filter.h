@@ -29,6 +29,10 @@
 
 /* Colour seen along an eye ray; seed is the (position, sample) stream. */
 typedef vec3 (*filter_trace_fn)(void *arg, const struct ray *r, uint64_t seed);
+/* The colours of n <= 4 eye rays at once: out[k] must be exactly what the
+ * filter_trace_fn it goes with gives for (r[k], seed[k]) (a packet of
+ * neighbouring rays traced together: accel_intersect4, shade_eye_hit4). */
+typedef void (*filter_trace4_fn)(void *arg, const struct ray r[4], const uint64_t seed[4], int n, vec3 out[4]);
 
 struct filter_chain {
 	struct cam cam;
@@ -72,6 +76,16 @@ void filter_scratch_free(struct filter_scratch *sc);
  */
 vec3 filter_pixel(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x,
 		  uint32_t y, filter_trace_fn fn, void *arg, uint64_t *rays);
+
+/*
+ * filter_pixel with fn4 (may be NULL: filter_pixel) for the rays it can
+ * trace four at a time: a super-sample grid that is the last layer (four
+ * consecutive samples a packet) and the corners of adaptive with nothing
+ * layered on it (the corners a square asks for at once). The same colour
+ * bit for bit, the same *rays; the cancel flag is polled once a packet.
+ */
+vec3 filter_pixel4(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x, uint32_t y,
+		   filter_trace_fn fn, filter_trace4_fn fn4, void *arg, uint64_t *rays);
 
 /*
  * True when the chain traces one pinhole eye ray per pixel, through its

@@ -643,8 +643,10 @@ static inline __attribute__((always_inline)) void surface(const struct geom_obj 
 	}
 	case PRIM_PLANE:
 	case PRIM_DISK: {
-		vec3 q = v3_sub(p, g->u.pl.pos);
 		*n = g->u.pl.n;
+		if (!uv)
+			break;
+		vec3 q = v3_sub(p, g->u.pl.pos);
 		*u = v3_dot(q, g->u.pl.X);
 		*v = v3_dot(q, g->u.pl.Y);
 		break;
@@ -700,8 +702,10 @@ static inline __attribute__((always_inline)) void surface(const struct geom_obj 
 		break;
 	}
 	case PRIM_POLYGON: {
-		vec3 q = v3_sub(p, g->u.poly.p0);
 		*n = g->u.poly.n;
+		if (!uv)
+			break;
+		vec3 q = v3_sub(p, g->u.poly.p0);
 		*u = v3_dot(q, g->u.poly.X);
 		*v = v3_dot(q, g->u.poly.Y);
 		break;

@@ -6,7 +6,10 @@
  * shade_trace, so it depends on the scene and the pixel alone. With one eye
  * ray per pixel (filter standard), the tile goes in 2x2 blocks whose eye
  * rays find their closest hits together (accel_intersect4: the same hits,
- * faster); each pixel is then shaded alone, exactly as filter_pixel would.
+ * faster) and whose shadow rays toward each point light go together too
+ * (shade_eye_hit4); each pixel gets exactly the colour filter_pixel would
+ * give. Other filters trace super-sample grids and adaptive corners four
+ * rays at a time the same way (filter_pixel4 over trace_shade4).
  */
 #include "common/render.h"
 
@@ -23,6 +26,10 @@
 /* render_ncpus at most: far more than any machine's cores, small enough
  * that a mistaken -j cannot exhaust the process. */
 #define RENDER_MAX_THREADS 1024
+/* Eye rays at least that trace_shade4 traces as a packet; fewer go one by
+ * one: packets of two or three (the last ray repeated) made adaptive
+ * renders of the teapot 3% slower (docs/performance.md, round 4). */
+#define PACKET_MIN_RAYS 4
 
 struct renderer {
 	const struct scene *s;
@@ -111,29 +118,49 @@ static vec3 trace_shade(void *arg, const struct ray *ray, uint64_t seed)
 }
 
 /*
- * Colours of n <= 4 pixels (px[k], py[k]) of a filter_single_ray chain:
- * their eye rays' closest hits from one accel_intersect4, each shaded as
- * filter_pixel over shade_trace would (the same colour, bit for bit). A
- * block of fewer than four pixels repeats its last ray.
+ * filter_trace4_fn over the shading engine: the colours of n <= 4 eye rays
+ * e[k], their closest hits from one accel_intersect4 and their shadow rays
+ * in packets (shade_eye_hit4), each what trace_shade gives (bit for bit).
+ * Fewer than PACKET_MIN_RAYS rays go one by one through trace_shade; a
+ * packet of fewer than four repeats its last ray.
  */
-static void eye_block(const struct renderer *r, const uint32_t px[4], const uint32_t py[4], int n, vec3 out[4])
+static void trace_shade4(void *arg, const struct ray e[4], const uint64_t seed[4], int n, vec3 out[4])
 {
+	const struct renderer *r = arg;
+	if (n < PACKET_MIN_RAYS) { /* a packet of fewer rays costs four */
+		for (int k = 0; k < n; k++)
+			out[k] = trace_shade(arg, &e[k], seed[k]);
+		return;
+	}
 	struct ray u[4];
-	uint64_t seed[4];
 	bool ok[4];
 	for (int k = 0; k < 4; k++) {
 		int q = k < n ? k : n - 1;
-		struct ray e;
-		filter_eye_ray(&r->fc, px[q], py[q], &e, &seed[k]);
-		ok[k] = shade_eye_ray(&e, &u[k]);
+		ok[k] = shade_eye_ray(&e[q], &u[k]);
 		if (!ok[k])
-			u[k] = e; /* traced for nothing, never shaded */
+			u[k] = e[q]; /* traced for nothing, never shaded */
 	}
 	struct hit h[4];
 	bool hit[4];
 	accel_intersect4(r->accel, u, h, hit);
+	const struct hit *hp[4];
+	for (int k = 0; k < 4; k++)
+		hp[k] = ok[k] && hit[k] ? &h[k] : NULL; /* !ok: black, as shade_eye_hit of a miss */
+	shade_eye_hit4(r->shade, u, hp, seed, n, out);
+}
+
+/*
+ * Colours of n <= 4 pixels (px[k], py[k]) of a filter_single_ray chain:
+ * their eye rays (filter_eye_ray) through trace_shade4, each what
+ * filter_pixel over trace_shade gives.
+ */
+static void eye_block(const struct renderer *r, const uint32_t px[4], const uint32_t py[4], int n, vec3 out[4])
+{
+	struct ray e[4];
+	uint64_t seed[4];
 	for (int k = 0; k < n; k++)
-		out[k] = ok[k] ? shade_eye_hit(r->shade, &u[k], hit[k] ? &h[k] : NULL, seed[k]) : v3(0, 0, 0);
+		filter_eye_ray(&r->fc, px[k], py[k], &e[k], &seed[k]);
+	trace_shade4((void *)r, e, seed, n, out);
 }
 
 /* Stores a filter colour as one pixel of a type (enum render_pixel). */
@@ -215,7 +242,8 @@ static void tile_pixels(const struct renderer *r, struct tile_rect t, const stru
 				memset(row + (size_t)i * ps->bpp, 0, ps->bpp);
 				continue;
 			}
-			vec3 c = filter_pixel(&r->fc, scratch, (uint32_t)x, (uint32_t)y, trace_shade, (void *)r, rays);
+			vec3 c = filter_pixel4(&r->fc, scratch, (uint32_t)x, (uint32_t)y, trace_shade, trace_shade4,
+					       (void *)r, rays);
 			ps->put(c, row + (size_t)i * ps->bpp);
 		}
 	}

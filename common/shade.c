@@ -52,6 +52,48 @@ struct shade_ctx {
 	bool any_transparent; /* some material has transparency > 0 */
 };
 
+/*
+ * LAST-BLOCKER HINTS (accel_occluded_hint): one per light and thread, in a
+ * small direct-mapped table of the thread's, keyed by (context, light). A
+ * hint never changes an answer, only what is tested first, so a slot that
+ * two lights share, or a stale context at a reused address, costs time at
+ * most; the table lives in thread-local storage because shading's context
+ * is shared, read-only, by every tracing thread.
+ */
+#define SHADE_HINTS 64
+struct shade_hint {
+	const struct shade_ctx *c;
+	uint32_t light;
+	uint32_t ref;
+};
+static _Thread_local struct shade_hint hints[SHADE_HINTS];
+
+/* The calling thread's hint for light i of c. */
+static uint32_t *light_hint(const struct shade_ctx *c, uint32_t i)
+{
+	struct shade_hint *e = &hints[i % SHADE_HINTS];
+	if (e->c != c || e->light != i) {
+		e->c = c;
+		e->light = i;
+		e->ref = ACCEL_NO_HINT;
+	}
+	return &e->ref;
+}
+
+/*
+ * SHADOW PACKETS. Before a 2x2 block of eye hits is shaded, their shadow
+ * rays toward each point light among the first SHADE_PRE_LIGHTS lights
+ * are traced together (shadow_packets, accel_occluded4); struct
+ * shadow_pre keeps a bit per light. direct() then takes a ray's answer
+ * from there instead of tracing it: shadow_packets builds the same ray
+ * with direct()'s and transmittance()'s arithmetic, so the same answer.
+ */
+#define SHADE_PRE_LIGHTS 32
+struct shadow_pre {
+	uint32_t known; /* bit i: light i's shadow ray from this hit was traced */
+	uint32_t occ;   /* bit i: ... and it was blocked */
+};
+
 /* Two unit vectors perpendicular to unit axis a and to each other. */
 static void frame(vec3 a, vec3 *e1, vec3 *e2)
 {
@@ -204,11 +246,11 @@ static void need_surface(const struct shade_ctx *c, struct hit *h)
  * the way, 0 when something opaque is; each transparent surface crossed
  * multiplies it by transparency x tran-colour.
  */
-static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp)
+static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp, uint32_t light)
 {
 	struct ray r = { o, v3_sub(lp, o), 0, 1 };
 	if (!c->any_transparent)
-		return accel_occluded(c->a, &r) ? v3(0, 0, 0) : v3(1, 1, 1);
+		return accel_occluded_hint(c->a, &r, light_hint(c, light)) ? v3(0, 0, 0) : v3(1, 1, 1);
 	vec3 t = v3(1, 1, 1);
 	for (int i = 0; i < LIM_SHADOW_HITS; i++) {
 		if (i && cancel_poll()) /* CANCELLATION: shaders may be costly */
@@ -243,7 +285,7 @@ static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp)
  * this makes in a pixel is below SHADE_MIN_WEIGHT.
  */
 static vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, const struct shader_mat *m,
-		   double kd, double weight, uint64_t seed)
+		   double kd, double weight, uint64_t seed, const struct shadow_pre *pre)
 {
 	bool shadows = !c->s->image.no_shadows;
 	bool want_spec = m->specular != 0;
@@ -255,12 +297,17 @@ static vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, c
 			return col;
 		const struct shade_light *L = &c->lights[i];
 		const struct scene_light *l = L->l;
-		int n_samples = l->shape == LIGHT_POINT ? 1 : l->samples;
-		uint64_t ls = rng_derive(seed, TAG_LIGHT + i);
-		double r1 = rng_uniform(ls, 0), r2 = rng_uniform(ls, 1);
+		bool point = l->shape == LIGHT_POINT;
+		int n_samples = point ? 1 : l->samples;
+		double r1 = 0, r2 = 0;
+		if (!point) { /* a point light draws no sample: nothing to derive */
+			uint64_t ls = rng_derive(seed, TAG_LIGHT + i);
+			r1 = rng_uniform(ls, 0);
+			r2 = rng_uniform(ls, 1);
+		}
 		vec3 sum = v3(0, 0, 0);
 		for (int k = 0; k < n_samples; k++) {
-			vec3 lp = light_point(L, k, n_samples, r1, r2);
+			vec3 lp = point ? l->position : light_point(L, k, n_samples, r1, r2);
 			vec3 to = v3_sub(lp, p);
 			double dist = v3_len(to);
 			if (!(dist > 0))
@@ -282,10 +329,15 @@ static vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, c
 			if (maxabs(term) * weight < cut * n_samples)
 				continue;
 			if (shadows && !l->no_shadows) {
-				vec3 t = transmittance(c, offset(p, ng, ldir), lp);
-				if (maxc(t) <= 0)
-					continue;
-				term = v3_mul(term, t);
+				if (pre && i < SHADE_PRE_LIGHTS && (pre->known >> i & 1)) { /* SHADOW PACKETS */
+					if (pre->occ >> i & 1)
+						continue;
+				} else {
+					vec3 t = transmittance(c, offset(p, ng, ldir), lp, i);
+					if (maxc(t) <= 0)
+						continue;
+					term = v3_mul(term, t);
+				}
 			}
 			sum = v3_add(sum, term);
 		}
@@ -320,28 +372,65 @@ static vec3 trace(const struct shade_ctx *c, const struct ray *r, int depth, dou
 	return trace_hit(c, r, &h, depth, weight, seed);
 }
 
+/* A hit made ready for shading: facing the viewer, its material evaluated. */
+struct surf {
+	struct hit h;
+	bool entering;       /* the ray meets the geometric normal's front */
+	vec3 ng;             /* geometric normal facing the viewer */
+	vec3 n;              /* shading normal (the shader's) */
+	struct shader_mat m;
+	double td;           /* transparency clamped to [0, 1] */
+};
+
+/* The first half of trace_hit: false when the hit cannot be shaded (black). */
+static bool surf_prepare(const struct shade_ctx *c, const struct ray *r, const struct hit *hp, struct surf *sf)
+{
+	sf->h = *hp;
+	struct hit *h = &sf->h;
+	if (!v3_finite(h->p))
+		return false;
+	vec3 d = r->d;
+
+	/* face the viewer: the geometric normal decides the side, n follows it */
+	sf->entering = v3_dot(h->ng, d) < 0;
+	sf->ng = sf->entering ? h->ng : v3_neg(h->ng);
+	vec3 n0 = sf->entering ? h->n : v3_neg(h->n);
+	need_surface(c, h);
+	struct shader_point pt = { h->mp, h->u, h->v, n0 };
+	shader_eval(c->s, h->material, &pt, &sf->m);
+	sf->n = sf->m.n;
+	double tr = sf->m.transparency;
+	sf->td = tr < 0 ? 0 : tr > 1 ? 1 : tr;
+	return true;
+}
+
+static vec3 surf_shade(const struct shade_ctx *c, const struct ray *r, const struct surf *sf, int depth,
+		       double weight, uint64_t seed, const struct shadow_pre *pre);
+
 /* trace() given the ray's closest hit *hp. */
 static vec3 trace_hit(const struct shade_ctx *c, const struct ray *r, const struct hit *hp, int depth,
 		      double weight, uint64_t seed)
 {
-	struct hit h = *hp;
-	if (!v3_finite(h.p))
+	struct surf sf;
+	if (!surf_prepare(c, r, hp, &sf))
 		return v3(0, 0, 0);
+	return surf_shade(c, r, &sf, depth, weight, seed, NULL);
+}
+
+/* The second half of trace_hit, with the shadow answers of pre (NULL: none
+ * known) for the hit's own direct lighting. */
+static vec3 surf_shade(const struct shade_ctx *c, const struct ray *r, const struct surf *sf, int depth,
+		       double weight, uint64_t seed, const struct shadow_pre *pre)
+{
+	const struct hit h = sf->h;
+	const struct shader_mat m = sf->m;
 	vec3 d = r->d;
-
-	/* face the viewer: the geometric normal decides the side, n follows it */
-	bool entering = v3_dot(h.ng, d) < 0;
-	vec3 ng = entering ? h.ng : v3_neg(h.ng);
-	vec3 n0 = entering ? h.n : v3_neg(h.n);
-	need_surface(c, &h);
-	struct shader_point pt = { h.mp, h.u, h.v, n0 };
-	struct shader_mat m;
-	shader_eval(c->s, h.material, &pt, &m);
-	vec3 n = m.n;
+	bool entering = sf->entering;
+	vec3 ng = sf->ng, n = sf->n;
 	vec3 v = v3_neg(d);
-	double td = m.transparency < 0 ? 0 : m.transparency > 1 ? 1 : m.transparency;
+	double td = sf->td;
 
-	vec3 col = direct(c, h.p, n, ng, v, &m, m.diffuse * (1 - td), weight, seed);
+	vec3 col = direct(c, h.p, n, ng, v, &m, m.diffuse * (1 - td), weight, seed, pre);
 
 	if (depth >= LIM_TRACE_DEPTH)
 		return col;
@@ -398,6 +487,71 @@ bool shade_eye_ray(const struct ray *r, struct ray *u)
 vec3 shade_eye_hit(const struct shade_ctx *c, const struct ray *u, const struct hit *h, uint64_t seed)
 {
 	return h ? trace_hit(c, u, h, 0, 1.0, seed) : v3(0, 0, 0);
+}
+
+/*
+ * SHADOW PACKETS: the shadow rays that direct() will trace from each
+ * prepared hit (ok[k]) toward each of the first SHADE_PRE_LIGHTS point
+ * lights, four at a time, into pre[k]. A ray is built exactly as direct()
+ * and transmittance() build it and only where direct() gets as far as
+ * tracing it but for its cut-off test (so rarely for nothing); scenes with
+ * transparent materials are left to direct(), whose shadow rays look
+ * through them.
+ */
+static void shadow_packets(const struct shade_ctx *c, const struct surf sf[4], const bool ok[4], int n,
+			   struct shadow_pre pre[4])
+{
+	for (int k = 0; k < 4; k++)
+		pre[k].known = pre[k].occ = 0;
+	if (c->s->image.no_shadows || c->any_transparent)
+		return;
+	uint32_t n_lights = c->n_lights < SHADE_PRE_LIGHTS ? c->n_lights : SHADE_PRE_LIGHTS;
+	for (uint32_t i = 0; i < n_lights; i++) {
+		const struct scene_light *l = c->lights[i].l;
+		if (l->shape != LIGHT_POINT || l->no_shadows)
+			continue;
+		vec3 lp = l->position;
+		struct ray r[4];
+		int who[4], m = 0;
+		for (int k = 0; k < n; k++) {
+			if (!ok[k])
+				continue;
+			vec3 p = sf[k].h.p;
+			vec3 to = v3_sub(lp, p); /* direct()'s arithmetic */
+			double dist = v3_len(to);
+			if (!(dist > 0))
+				continue;
+			vec3 ldir = v3_scale(to, 1 / dist);
+			if (v3_dot(sf[k].n, ldir) <= 0)
+				continue;
+			vec3 o = offset(p, sf[k].ng, ldir);
+			r[m] = (struct ray){ o, v3_sub(lp, o), 0, 1 }; /* transmittance()'s */
+			who[m++] = k;
+		}
+		if (!m)
+			continue;
+		for (int j = m; j < 4; j++)
+			r[j] = r[m - 1];
+		bool occ[4];
+		accel_occluded4(c->a, r, occ, light_hint(c, i));
+		for (int j = 0; j < m; j++) {
+			pre[who[j]].known |= 1u << i;
+			pre[who[j]].occ |= (uint32_t)occ[j] << i;
+		}
+	}
+}
+
+void shade_eye_hit4(const struct shade_ctx *c, const struct ray u[4], const struct hit *h[4],
+		    const uint64_t seed[4], int n, vec3 out[4])
+{
+	struct surf sf[4];
+	bool ok[4] = { false, false, false, false };
+	for (int k = 0; k < n; k++)
+		ok[k] = h[k] && surf_prepare(c, &u[k], h[k], &sf[k]);
+	struct shadow_pre pre[4];
+	shadow_packets(c, sf, ok, n, pre);
+	for (int k = 0; k < n; k++)
+		out[k] = ok[k] ? surf_shade(c, &u[k], &sf[k], 0, 1.0, seed[k], &pre[k]) : v3(0, 0, 0);
 }
 
 vec3 shade_trace(const struct shade_ctx *c, const struct ray *r, uint64_t seed)

@@ -37,5 +37,12 @@ vec3 shade_trace(const struct shade_ctx *c, const struct ray *r, uint64_t seed);
  */
 bool shade_eye_ray(const struct ray *r, struct ray *u);
 vec3 shade_eye_hit(const struct shade_ctx *c, const struct ray *u, const struct hit *h, uint64_t seed);
+/*
+ * shade_eye_hit of n <= 4 neighbouring eye rays (a 2x2 block): out[k] is
+ * shade_eye_hit(c, &u[k], h[k], seed[k]) bit for bit; their hits' shadow
+ * rays toward each point light are traced together (accel_occluded4).
+ */
+void shade_eye_hit4(const struct shade_ctx *c, const struct ray u[4], const struct hit *h[4],
+		    const uint64_t seed[4], int n, vec3 out[4]);
 
 #endif

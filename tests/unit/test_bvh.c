@@ -12,7 +12,10 @@
  * Packets: accel_intersect4 gives every ray exactly accel_intersect's hit,
  * for four unrelated rays (mostly of different octants) and for four
  * neighbouring rays from one origin (the packet traversal), also with a
- * window (tmin > 0, finite tmax) and along an axis. The builder's depth
+ * window (tmin > 0, finite tmax) and along an axis. The occlusion queries
+ * (accel_occluded4, accel_occluded_hint, with hints carried over or made
+ * up) answer as accel_occluded for those packets and for four shadow rays
+ * toward one point (tmax 1). The builder's depth
  * limit leaves a leaf of hundreds of items (the traversals test such leaves
  * a chunk at a time: CANCELLATION in accel.c).
  */
@@ -47,6 +50,7 @@ struct job {
 	int from, to;
 	int mismatch, ties, hits;
 	int packets, packet_mismatch;
+	uint32_t hint; /* last-blocker hint carried from packet to packet */
 };
 
 /* The same hit, bit for bit (what accel_intersect4 promises). */
@@ -59,7 +63,26 @@ static bool same_hit(bool b1, const struct hit *h1, bool b2, const struct hit *h
 		       h1->object == h2->object && h1->material == h2->material);
 }
 
-/* accel_intersect4 over r[0..4) against accel_intersect, ray by ray. */
+/* accel_occluded4 and accel_occluded_hint over r[0..4) against
+ * accel_occluded, ray by ray, with the hint the job carries (whatever
+ * blocked its last rays) or, every fifth packet, an arbitrary one. */
+static void occluded_check(struct job *j, const struct ray r[4])
+{
+	bool occ[4];
+	if (j->packets % 5 == 4)
+		j->hint = (uint32_t)rng_mix((uint64_t)j->packets);
+	accel_occluded4(j->a, r, occ, &j->hint);
+	for (int i = 0; i < 4; i++) {
+		bool o1 = accel_occluded(j->a, &r[i]);
+		if (occ[i] != o1 || accel_occluded_hint(j->a, &r[i], &j->hint) != o1) {
+			j->packet_mismatch++;
+			return;
+		}
+	}
+}
+
+/* accel_intersect4 over r[0..4) against accel_intersect, ray by ray; the
+ * occlusion queries too (occluded_check). */
 static void packet_check(struct job *j, const struct ray r[4])
 {
 	struct hit h[4], h1;
@@ -73,6 +96,7 @@ static void packet_check(struct job *j, const struct ray r[4])
 			return;
 		}
 	}
+	occluded_check(j, r);
 }
 
 /* Rays [from, to): BVH, brute force and occlusion compared. */
@@ -102,6 +126,12 @@ static void *run_rays(void *arg)
 			for (int i = 0; i < 4; i++) /* axis-parallel neighbours (zero components, -0 in z) */
 				fan[i] = (struct ray){ o, v3(1e-3 * i, k % 8 < 4 ? 1 : -1, -0.0), 0.01 * i, 2 + i };
 			packet_check(j, fan);
+			for (int i = 0; i < 4; i++) { /* shadow rays: four origins toward one point (tmax 1) */
+				vec3 oi = v3_add(o, v3(1e-2 * (i & 1), 1e-2 * (i >> 1), 0));
+				vec3 to = v3_add(o, v3_scale(r.d, 0.5 + 2 * rng_uniform(j->seed, 4ull * k + i + 7)));
+				fan[i] = (struct ray){ oi, v3_sub(to, oi), 0, 1 };
+			}
+			occluded_check(j, fan);
 		}
 		struct hit h1, h2;
 		bool b1 = accel_intersect(j->a, &r, &h1), b2 = accel_intersect_brute(j->a, &r, &h2);
@@ -596,6 +626,10 @@ static void big_leaf(void)
 		bool f = accel_intersect(a, &r[0], &h), fb = accel_intersect_brute(a, &r[0], &hb);
 		mismatch += !same_hit(f, &h, fb, &hb);
 		mismatch += accel_occluded(a, &r[0]) != fb;
+		bool occ4[4];
+		uint32_t hint = ACCEL_NO_HINT;
+		accel_occluded4(a, r, occ4, &hint);
+		mismatch += occ4[0] != fb;
 		accel_intersect4(a, r, h4, hit4);
 		mismatch += !same_hit(hit4[0], &h4[0], f, &h);
 		hits += f;
@@ -606,6 +640,68 @@ static void big_leaf(void)
 	scene_free(s);
 }
 
+/*
+ * The packets' triangle pre-test (TRIANGLE PRE-TEST in accel.c) at its
+ * margins: a grid of triangles (near the origin, and 1000 units away,
+ * where floats are coarse) and packets of four rays from one origin aimed
+ * at the grid's shared vertices and edge midpoints, exactly and off by
+ * 1e-15 to 1e-7: every ray's hit is accel_intersect's, bit for bit.
+ */
+#define EDGE_GRID 6
+static void tri_margins(void)
+{
+	for (int far = 0; far < 2; far++) {
+		struct scene *s = scene_new();
+		struct scene_error err;
+		double x0 = far ? 1000 : 0, h = 1.0 / EDGE_GRID;
+		for (int j = 0; j < EDGE_GRID; j++)
+			for (int i = 0; i < EDGE_GRID; i++)
+				for (int t = 0; t < 2; t++) {
+					struct scene_object o;
+					scene_object_defaults(&o, PRIM_TRIANGLE);
+					vec3 p00 = v3(x0 + i * h, j * h, 0.01 * ((i + j) % 3)), p10 = v3(x0 + (i + 1) * h, j * h, 0);
+					vec3 p01 = v3(x0 + i * h, (j + 1) * h, 0), p11 = v3(x0 + (i + 1) * h, (j + 1) * h, 0.02);
+					o.u.triangle.a = p00;
+					o.u.triangle.b = t ? p11 : p10;
+					o.u.triangle.c = t ? p01 : p11;
+					uint32_t id;
+					CHECK(scene_add_object(s, &o, &id, &err) == 0);
+					CHECK(scene_add_root(s, id, &err) == 0);
+				}
+		struct accel *a;
+		CHECK(accel_build(s, &a, &err) == 0);
+		int mismatch = 0, hits = 0;
+		static const double offs[] = { 0, 1e-15, 1e-12, 1e-9, 1e-7 };
+		for (int k = 0; k < 4000; k++) {
+			int i = (int)(rng_uniform(31, 3ull * k) * (EDGE_GRID + 1)), j = (int)(rng_uniform(31, 3ull * k + 1) * (EDGE_GRID + 1));
+			double half = k % 3 == 1 ? h / 2 : 0; /* a vertex, or an edge's midpoint */
+			vec3 target = v3(x0 + i * h + half, j * h + (k % 3 == 2 ? h / 2 : 0), 0);
+			vec3 o = v3(x0 + 2 * rng_uniform(31, 3ull * k + 2) - 0.5, 1.5 * rng_uniform(32, k) - 0.25,
+				    0.5 + 2 * rng_uniform(33, k));
+			double e = offs[k % 5];
+			struct ray r[4];
+			for (int l = 0; l < 4; l++) {
+				vec3 tl = v3_add(target, v3(e * ((l & 1) ? 1 : -1), e * ((l & 2) ? 1 : -1), 0));
+				r[l] = (struct ray){ o, v3_sub(tl, o), 0, INFINITY };
+			}
+			struct hit h4[4], h1;
+			bool hit4[4];
+			accel_intersect4(a, r, h4, hit4);
+			for (int l = 0; l < 4; l++) {
+				bool b1 = accel_intersect(a, &r[l], &h1);
+				mismatch += !same_hit(b1, &h1, hit4[l], &h4[l]);
+				hits += b1;
+			}
+		}
+		printf("triangle pre-test margins (%s): 16000 rays, %d hits, %d unlike single rays\n",
+		       far ? "1000 units away" : "at the origin", hits, mismatch);
+		CHECK(mismatch == 0);
+		CHECK(hits > 8000);
+		accel_free(a);
+		scene_free(s);
+	}
+}
+
 int main(void)
 {
 	const char *full = getenv("PORTRAY_TEST_FULL");
@@ -613,6 +709,7 @@ int main(void)
 		n_rays = N_RAYS_FULL;
 	builder();
 	big_leaf();
+	tri_margins();
 	far_away();
 	mixed();
 	many_instances();

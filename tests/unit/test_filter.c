@@ -39,6 +39,38 @@ static vec3 trace_record(void *arg, const struct ray *r, uint64_t seed)
 	return v3(0, 0, 0);
 }
 
+/* trace_noisy four rays at a time (filter_trace4_fn), counting packets. */
+static int n_packets;
+static void trace_noisy4(void *arg, const struct ray r[4], const uint64_t seed[4], int n, vec3 out[4])
+{
+	CHECK(n >= 1 && n <= 4);
+	n_packets++;
+	for (int k = 0; k < n; k++)
+		out[k] = trace_noisy(arg, &r[k], seed[k]);
+}
+
+/* filter_pixel4 over every pixel of a w x h chain (scratch per row when
+ * cache) gives filter_pixel's colours bit for bit and its ray count;
+ * returns the packets traced. */
+static int packets_agree(const struct filter_chain *fc, uint32_t w, uint32_t h, bool cache)
+{
+	n_packets = 0;
+	for (uint32_t y = 0; y < h; y++) {
+		struct filter_scratch *s1 = cache ? filter_scratch_new(fc) : NULL;
+		struct filter_scratch *s4 = cache ? filter_scratch_new(fc) : NULL;
+		for (uint32_t x = 0; x < w; x++) {
+			uint64_t r1 = 0, r4 = 0;
+			vec3 v1 = filter_pixel(fc, s1, x, y, trace_noisy, NULL, &r1);
+			vec3 v4 = filter_pixel4(fc, s4, x, y, trace_noisy, trace_noisy4, NULL, &r4);
+			CHECK(memcmp(&v1, &v4, sizeof v1) == 0);
+			CHECK(r1 == r4);
+		}
+		filter_scratch_free(s1);
+		filter_scratch_free(s4);
+	}
+	return n_packets;
+}
+
 static struct scene_camera base_camera(void)
 {
 	struct scene_camera c;
@@ -313,5 +345,43 @@ int main(void)
 	CHECK(q[0] == 128 && q[1] == 255 && q[2] == 0);
 	filter_quantise(v3(NAN, 1.0 / 255, 0.4 / 255), q);
 	CHECK(q[0] == 0 && q[1] == 1 && q[2] == 0);
+	/* packets (filter_pixel4): a last super-sample grid four samples a
+	 * packet (3 x 3: 4, 4, 1), alone, after a lens, under adaptive;
+	 * adaptive's corners four at a time, with and without the cache, and
+	 * with a cache of one slot (corners of one batch share it) */
+	c = base_camera();
+	add(&c, FILTER_STANDARD);
+	add(&c, FILTER_SUPERSAMPLE);
+	c.filters[1].x_samples = 3;
+	c.filters[1].y_samples = 3;
+	chain(&fc, &c, 9, 7);
+	CHECK(packets_agree(&fc, 9, 7, false) == 9 * 7 * 3);
+	c = base_camera();
+	add(&c, FILTER_STANDARD);
+	add(&c, FILTER_LENS);
+	c.filters[1].samples = 3;
+	add(&c, FILTER_SUPERSAMPLE);
+	c.filters[2].x_samples = 2;
+	c.filters[2].y_samples = 3;
+	chain(&fc, &c, 5, 4);
+	CHECK(packets_agree(&fc, 5, 4, false) == 5 * 4 * 3 * 2);
+	for (int size = 0; size < 3; size++) {
+		c = base_camera();
+		add(&c, FILTER_ADAPTIVE);
+		c.filters[0].threshold = 0.05;
+		c.filters[0].max_depth = 3;
+		c.filters[0].cache_size = size == 2 ? 1 : 64;
+		chain(&fc, &c, 12, 9);
+		CHECK(packets_agree(&fc, 12, 9, size > 0) > 12 * 9);
+	}
+	c = base_camera();
+	add(&c, FILTER_ADAPTIVE);
+	c.filters[0].threshold = 0.05;
+	add(&c, FILTER_SUPERSAMPLE);
+	c.filters[1].x_samples = 2;
+	c.filters[1].y_samples = 2;
+	chain(&fc, &c, 6, 5);
+	CHECK(packets_agree(&fc, 6, 5, true) > 6 * 5);
+
 	TEST_MAIN_END();
 }

@@ -263,6 +263,38 @@ int main(void)
 	free(a);
 	free(b);
 
+	/* shadow packets (shade_eye_hit4 over 2x2 blocks) against single rays
+	 * (super-sample 1x1 traces one ray at a time): 40 dim point lights,
+	 * more than the packets take (SHADE_PRE_LIGHTS in shade.c), every
+	 * fifth without shadows, besides make_scene's sphere and point light */
+	for (int k = 0; k < 2; k++) {
+		uint8_t *img[2];
+		for (int v = 0; v < 2; v++) {
+			c = base_camera();
+			add_filter(&c, FILTER_STANDARD);
+			if (v) {
+				add_filter(&c, FILTER_SUPERSAMPLE);
+				c.filters[1].x_samples = c.filters[1].y_samples = 1;
+			}
+			s = make_scene(&c, 1);
+			for (int i = 0; i < 40 * k; i++) {
+				struct scene_light l;
+				scene_light_defaults(&l);
+				l.position = v3(-6 + 0.3 * i, 2 + 0.1 * (i % 7), 3 - 0.2 * (i % 5));
+				l.colour = v3(0.02, 0.025, 0.03);
+				l.no_shadows = i % 5 == 4;
+				CHECK(scene_add_light(s, &l, &err) == 0);
+			}
+			CHECK(renderer_new(s, &r, &err) == 0);
+			img[v] = render(r, 2, 16);
+			renderer_free(r);
+			scene_free(s);
+		}
+		CHECK(memcmp(img[0], img[1], W * H * 3) == 0);
+		free(img[0]);
+		free(img[1]);
+	}
+
 	/* a flat scene (nothing but the black background) is black under every filter */
 	for (int k = FILTER_STANDARD; k <= FILTER_LENS; k++) {
 		c = base_camera();

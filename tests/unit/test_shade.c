@@ -104,6 +104,19 @@ bool accel_occluded(const struct accel *a, const struct ray *r)
 	return false;
 }
 
+/* The hint changes no answer (accel.h): the mock ignores it. */
+bool accel_occluded_hint(const struct accel *a, const struct ray *r, uint32_t *hint)
+{
+	(void)hint;
+	return accel_occluded(a, r);
+}
+
+void accel_occluded4(const struct accel *a, const struct ray r[4], bool occ[4], uint32_t *hint)
+{
+	for (int i = 0; i < 4; i++)
+		occ[i] = accel_occluded_hint(a, &r[i], hint);
+}
+
 /* The same offset as the real accel's (accel.h). */
 vec3 accel_offset_point(vec3 p, vec3 ng, vec3 dir)
 {

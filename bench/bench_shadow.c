@@ -1,0 +1,183 @@
+/*
+ * bench_shadow.c - the A/B figure for shadow rays: the eye rays of every
+ * pixel centre find their closest hits (2x2 blocks, as the renderer), then
+ * each hit sends one shadow ray to every point light that casts shadows
+ * and lies in front of the surface (the ray shading makes: from
+ * accel_offset_point to the light, tmin 0, tmax 1). Those rays, made once,
+ * are traced FRAMES times three ways, one thread:
+ *   single   accel_occluded, one ray at a time (the query before issue 13)
+ *   hint     accel_occluded_hint with one last-blocker hint per light
+ *   packet   accel_occluded4 over the rays of one 2x2 block toward one
+ *            light, one hint per light (what the renderer does)
+ * and prints the best frame's rate in Mrays/s of thread CPU time, and a
+ * hash of the answers, which must be the same all three ways.
+ *
+ *   bench_shadow [SCENE [FRAMES [WIDTHxHEIGHT]]]
+ *
+ * Defaults: tests/data/spd/balls_s4.sce, 7 frames, 1280x960. Target
+ * (issue 13): >= 20 Mrays/s per core on balls_s4. Not a test.
+ */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "common/accel.h"
+#include "common/camera.h"
+#include "common/parse.h"
+
+static double cpu_now(void)
+{
+	struct timespec t;
+	clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* Shadow rays in packets of four: n live rays (the rest repeat the last)
+ * toward light `light`. */
+struct pack {
+	struct ray r[4];
+	int n;
+	uint32_t light;
+};
+
+struct set {
+	struct pack *p;
+	size_t n, cap;
+	size_t rays;
+};
+
+static int push(struct set *s, const struct pack *p)
+{
+	if (s->n == s->cap) {
+		size_t cap = s->cap ? 2 * s->cap : 4096;
+		struct pack *np = realloc(s->p, cap * sizeof *np);
+		if (!np)
+			return -1;
+		s->p = np;
+		s->cap = cap;
+	}
+	s->p[s->n++] = *p;
+	s->rays += (size_t)p->n;
+	return 0;
+}
+
+/* The shadow rays of the frame's primary hits, block by block, light by light. */
+static int make_rays(const struct scene *sc, const struct accel *a, const struct cam *c, struct set *s)
+{
+	for (uint32_t y = 0; y < c->h; y += 2) {
+		for (uint32_t x = 0; x < c->w; x += 2) {
+			struct ray r[4];
+			struct hit h[4];
+			bool hit[4];
+			for (uint32_t i = 0; i < 4; i++) {
+				uint32_t px = x + (i & 1), py = y + (i >> 1);
+				r[i] = cam_ray(c, (px < c->w ? px : c->w - 1) + 0.5, (py < c->h ? py : c->h - 1) + 0.5);
+			}
+			accel_intersect4(a, r, h, hit);
+			for (uint32_t l = 0; l < sc->n_lights; l++) {
+				const struct scene_light *L = &sc->lights[l];
+				if (L->shape != LIGHT_POINT || L->no_shadows)
+					continue;
+				struct pack p = { .n = 0, .light = l };
+				for (uint32_t i = 0; i < 4; i++) {
+					if (!hit[i] || x + (i & 1) >= c->w || y + (i >> 1) >= c->h)
+						continue;
+					vec3 ng = v3_dot(h[i].ng, r[i].d) < 0 ? h[i].ng : v3_neg(h[i].ng);
+					vec3 to = v3_sub(L->position, h[i].p);
+					double dist = v3_len(to);
+					if (!(dist > 0) || v3_dot(ng, to) <= 0)
+						continue;
+					vec3 o = accel_offset_point(h[i].p, ng, v3_scale(to, 1 / dist));
+					p.r[p.n++] = (struct ray){ o, v3_sub(L->position, o), 0, 1 };
+				}
+				if (!p.n)
+					continue;
+				for (int i = p.n; i < 4; i++)
+					p.r[i] = p.r[p.n - 1];
+				if (push(s, &p))
+					return -1;
+			}
+		}
+	}
+	return 0;
+}
+
+enum mode { SINGLE, HINT, PACKET };
+
+/* One pass over the rays; returns the hash of the answers. */
+static uint64_t pass(const struct accel *a, const struct set *s, enum mode m, uint32_t n_lights)
+{
+	uint32_t *hint = malloc((n_lights ? n_lights : 1) * sizeof *hint);
+	if (!hint)
+		return 0;
+	for (uint32_t l = 0; l < n_lights; l++)
+		hint[l] = ACCEL_NO_HINT;
+	uint64_t h64 = 1469598103934665603ull;
+	for (size_t k = 0; k < s->n; k++) {
+		const struct pack *p = &s->p[k];
+		bool occ[4];
+		if (m == PACKET)
+			accel_occluded4(a, p->r, occ, &hint[p->light]);
+		else
+			for (int i = 0; i < p->n; i++)
+				occ[i] = m == HINT ? accel_occluded_hint(a, &p->r[i], &hint[p->light])
+						   : accel_occluded(a, &p->r[i]);
+		for (int i = 0; i < p->n; i++)
+			h64 = (h64 ^ (uint64_t)occ[i]) * 1099511628211ull;
+	}
+	free(hint);
+	return h64;
+}
+
+int main(int argc, char **argv)
+{
+	const char *path = argc > 1 ? argv[1] : "tests/data/spd/balls_s4.sce";
+	int frames = argc > 2 ? atoi(argv[2]) : 7;
+	unsigned w = 1280, h = 960;
+	if ((argc > 3 && sscanf(argv[3], "%ux%u", &w, &h) != 2) || frames < 1 || w == 0 || h == 0 || w > 100000 ||
+	    h > 100000) {
+		fprintf(stderr, "usage: bench_shadow [SCENE [FRAMES [WIDTHxHEIGHT]]]\n");
+		return 64;
+	}
+	struct scene *sc;
+	struct scene_error err;
+	if (parse_files(NULL, path, &sc, &err)) {
+		printf("%s: %s\n", path, err.msg);
+		return 1;
+	}
+	struct accel *a;
+	if (accel_build(sc, &a, &err)) {
+		printf("%s: %s\n", path, err.msg);
+		scene_free(sc);
+		return 1;
+	}
+	struct cam c;
+	struct set s = { 0 };
+	if (cam_init(&c, &sc->camera, w, h) < 0 || make_rays(sc, a, &c, &s)) {
+		printf("%s: degenerate camera or out of memory\n", path);
+		return 1;
+	}
+	static const char *names[] = { "single", "hint", "packet" };
+	uint64_t hash[3];
+	double best[3] = { INFINITY, INFINITY, INFINITY };
+	for (int m = 0; m < 3; m++)
+		hash[m] = pass(a, &s, (enum mode)m, sc->n_lights);
+	for (int f = 0; f < frames; f++) /* interleaved, so a load change hits all three */
+		for (int m = 0; m < 3; m++) {
+			double t0 = cpu_now();
+			pass(a, &s, (enum mode)m, sc->n_lights);
+			double t = cpu_now() - t0;
+			best[m] = t < best[m] ? t : best[m];
+		}
+	printf("%s %ux%u: %zu shadow rays (%.2f per pixel), best of %d, thread CPU time:\n", path, w, h, s.rays,
+	       (double)s.rays / ((double)w * h), frames);
+	for (int m = 0; m < 3; m++)
+		printf("  %-6s %6.2f Mrays/s; answers hash %016llx%s\n", names[m], (double)s.rays / best[m] * 1e-6,
+		       (unsigned long long)hash[m], hash[m] == hash[0] ? "" : " MISMATCH");
+	free(s.p);
+	accel_free(a);
+	scene_free(sc);
+	return 0;
+}
