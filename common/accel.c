@@ -405,7 +405,8 @@ static bool inst_hit(const struct accel *A, const struct ginst *in, const struct
 	struct trace lr;
 	trace_init(&lr, m34_point(&inv, r->o), m34_dir(&inv, r->d), r->tmin, r->tmax);
 	struct hit lh;
-	if (!group_hit(A, A->dgroup[A->s->objects[in->obj].u.instance.define], &lr, &lh, brute))
+	const struct scene_inst *si = scene_inst_at(A->s, in->obj);
+	if (!group_hit(A, A->dgroup[si->define], &lr, &lh, brute))
 		return false;
 	surface_complete(A->s, &lh); /* in the define's space */
 	h->t = lh.t;
@@ -414,7 +415,7 @@ static bool inst_hit(const struct accel *A, const struct ginst *in, const struct
 	h->u = lh.u;
 	h->v = lh.v;
 	h->object = lh.object;
-	uint32_t im = A->s->objects[in->obj].material;
+	uint32_t im = si->material;
 	if (lh.material == SCENE_NONE && im != SCENE_NONE) {
 		h->material = im;
 		h->mp = lh.p; /* the instance's own object space is the define's space */
@@ -433,7 +434,7 @@ static bool inst_occluded(const struct accel *A, const struct ginst *in, const s
 	inst_matrix(in, &inv);
 	struct trace lr;
 	trace_init(&lr, m34_point(&inv, r->o), m34_dir(&inv, r->d), r->tmin, r->tmax);
-	return group_occluded(A, A->dgroup[A->s->objects[in->obj].u.instance.define], &lr);
+	return group_occluded(A, A->dgroup[scene_inst_at(A->s, in->obj)->define], &lr);
 }
 
 /* The rarer kinds (xprims, CSG, instances), kept out of the traversal loop
@@ -638,7 +639,7 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 			h->n = h->ng = n;
 			h->mp = lp;
 			h->object = g->xp[i].obj;
-			h->material = s->objects[h->object].material;
+			h->material = s->objs[s->slot[h->object]].material; /* an xprim: not an instance */
 		}
 		break;
 	default:
@@ -665,7 +666,7 @@ static void surface_complete(const struct scene *s, struct hit *h)
 		geom_surface(h->surf, h->mp, (int)h->surf_idx, &n, &h->u, &h->v);
 	} else if (h->surf_kind == SURF_SPHERE) {
 		/* the default frame: P = +y, E = +x, W = P x E = -z (as geom_surface) */
-		const struct prim_sphere *ps = &s->objects[h->object].u.sphere;
+		const struct prim_sphere *ps = &s->objs[s->slot[h->object]].u.sphere;
 		vec3 q = h->n;
 		double phi = xm_atan2(-q.z, q.x);
 		if (phi < 0)

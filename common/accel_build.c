@@ -99,7 +99,8 @@ static int prep_tree(struct accel *A, uint32_t obj)
 		return ACCEL_CANCELLED;
 	if (!get_gobj(A, obj))
 		return -1;
-	const struct scene_object *o = &A->s->objects[obj];
+	struct scene_object tmp;
+	const struct scene_object *o = scene_object(A->s, obj, &tmp);
 	int rc = 0;
 	if (o->kind == PRIM_CSG) {
 		rc = prep_tree(A, o->u.csg.operand1);
@@ -316,7 +317,8 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	/* pass 1: counts */
 	uint64_t n_sph = 0, n_mesh = 0, n_tri = 0, n_xp = 0, n_inst = 0, n_bake = 0;
 	for (uint32_t k = 0; k < n; k++) {
-		const struct scene_object *o = &s->objects[objs[k]];
+		struct scene_object tmp;
+		const struct scene_object *o = scene_object(s, objs[k], &tmp);
 		switch (o->kind) {
 		case PRIM_SPHERE:
 			if (o->has_xform)
@@ -375,7 +377,8 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 		if (cancel_poll_every(k))
 			goto cancelled;
 		uint32_t oi = objs[k];
-		const struct scene_object *o = &s->objects[oi];
+		struct scene_object tmp;
+		const struct scene_object *o = scene_object(s, oi, &tmp);
 		struct geom_box bx;
 		uint32_t ref;
 		if (o->kind == PRIM_SPHERE && !o->has_xform) {
@@ -648,7 +651,8 @@ static int check_depths(const struct scene *s, struct scene_error *err)
 			rc = scene_errorf(err, ERRLEVEL_FATAL, "cancelled");
 			goto out;
 		}
-		const struct scene_object *o = &s->objects[i];
+		struct scene_object tmp;
+		const struct scene_object *o = scene_object(s, i, &tmp);
 		unsigned c = 0, d = 0;
 		if (o->kind == PRIM_CSG) {
 			uint32_t a = o->u.csg.operand1, b = o->u.csg.operand2;

@@ -242,7 +242,10 @@ int proto_scene_encode(const struct scene *s, uint8_t **out, size_t *len)
 		put_light(&b, &s->lights[i]);
 	proto_put_u32(&b, s->n_objects);
 	for (uint32_t i = 0; i < s->n_objects; i++)
-		put_object(&b, &s->objects[i]);
+	{
+		struct scene_object tmp;
+		put_object(&b, scene_object(s, i, &tmp));
+	}
 	proto_put_u32(&b, s->n_defines);
 	for (uint32_t i = 0; i < s->n_defines; i++) {
 		const struct scene_define *d = &s->defines[i];
@@ -654,7 +657,8 @@ static int check_nesting(struct dec *d)
 	 * once all objects below the first instance using it are done; compute
 	 * lazily: objects in order, a define's depth from its members on first use */
 	for (uint32_t i = 0; ok && i < s->n_objects; i++) {
-		const struct scene_object *o = &s->objects[i];
+		struct scene_object tmp;
+		const struct scene_object *o = scene_object(s, i, &tmp);
 		uint32_t v = 0;
 		if (o->kind == PRIM_CSG) {
 			uint32_t a = od[o->u.csg.operand1], b = od[o->u.csg.operand2];

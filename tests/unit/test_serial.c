@@ -58,11 +58,11 @@ static void test_fixture(void)
 		CHECK(strcmp(t->meshes[0].file, "smooth.raw") == 0);
 		CHECK(t->lights[2].shape == LIGHT_CYLINDER && t->lights[3].no_shadows);
 		uint32_t poly = s->roots[9];
-		CHECK(t->objects[poly].kind == PRIM_POLYGON && t->objects[poly].u.polygon.n_points == 7 &&
-		      t->objects[poly].u.polygon.contour_start[1] == 4);
-		CHECK(memcmp(&t->objects[0].xform, &s->objects[0].xform, sizeof(mat34)) == 0);
+		CHECK((*scene_object(t, poly, &(struct scene_object){ 0 })).kind == PRIM_POLYGON && (*scene_object(t, poly, &(struct scene_object){ 0 })).u.polygon.n_points == 7 &&
+		      (*scene_object(t, poly, &(struct scene_object){ 0 })).u.polygon.contour_start[1] == 4);
+		CHECK(memcmp(&scene_object(t, 0, &(struct scene_object){ 0 })->xform, &scene_object(s, 0, &(struct scene_object){ 0 })->xform, sizeof(mat34)) == 0);
 		CHECK(strcmp(t->defines[1].name, "wall") == 0 && t->defines[0].n_objects == 2);
-		CHECK(strcmp(t->objects[0].loc.file, PROTO_SCENE_FILE) == 0);
+		CHECK(strcmp((*scene_object(t, 0, &(struct scene_object){ 0 })).loc.file, PROTO_SCENE_FILE) == 0);
 		struct scene_stats st1, st2;
 		scene_stats(s, &st1);
 		scene_stats(t, &st2);
