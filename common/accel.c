@@ -14,8 +14,8 @@
  *   xprims     everything else (transformed spheres, planes, disks,
  *              cylinders, boxes, polygons, CSG nodes): the ray goes into
  *              the object's space through its inverse transform
- *   instances  (inverse transform as 12 floats, instance object): 52 bytes
- *              each, evaluated in double; the instance's geometry is exactly
+ *   instances  (inverse transform in float: a translation and a shared
+ *              3x3 part; instance object): 20 bytes each, evaluated in double; the instance's geometry is exactly
  *              the inverse of that float matrix, used consistently for rays,
  *              normals and bounds; a group of ACCEL_PACK_MIN or more
  *              instances and no other bounded reference keeps them in leaf
@@ -385,11 +385,15 @@ static inline uint32_t group_ref(const struct group *g, uint32_t k)
 	return g->refs ? g->refs[k] : REF_MAKE(REF_INST, k);
 }
 
-static void inst_matrix(const struct ginst *in, mat34 *m)
+/* The instance's inverse transform: its float values, in double. */
+static void inst_matrix(const struct accel *A, const struct ginst *in, mat34 *m)
 {
-	for (int i = 0; i < 3; i++)
-		for (int j = 0; j < 4; j++)
-			m->m[i][j] = in->inv[4 * i + j];
+	const float *l = A->ilin[in->lin];
+	for (int i = 0; i < 3; i++) {
+		for (int j = 0; j < 3; j++)
+			m->m[i][j] = l[3 * i + j];
+		m->m[i][3] = in->t[i];
+	}
 }
 
 /*
@@ -401,7 +405,7 @@ static bool inst_hit(const struct accel *A, const struct ginst *in, const struct
 	if (cancel_poll()) /* CANCELLATION: nested instances multiply the work */
 		return false;
 	mat34 inv;
-	inst_matrix(in, &inv);
+	inst_matrix(A, in, &inv);
 	struct trace lr;
 	trace_init(&lr, m34_point(&inv, r->o), m34_dir(&inv, r->d), r->tmin, r->tmax);
 	struct hit lh;
@@ -431,7 +435,7 @@ static bool inst_occluded(const struct accel *A, const struct ginst *in, const s
 	if (cancel_poll()) /* CANCELLATION */
 		return false;
 	mat34 inv;
-	inst_matrix(in, &inv);
+	inst_matrix(A, in, &inv);
 	struct trace lr;
 	trace_init(&lr, m34_point(&inv, r->o), m34_dir(&inv, r->d), r->tmin, r->tmax);
 	return group_occluded(A, A->dgroup[scene_inst_at(A->s, in->obj)->define], &lr);

@@ -1,9 +1,10 @@
 /*
  * accel.h - geometry and acceleration: the scene model's objects turned into
  * intersectable primitives under a multi-level BVH: each define is built
- * once into its own BVH and referenced by instances (an inverse transform
- * and an object index, 52 bytes); defines nest to LIM_DEFINE_DEPTH, CSG to
- * LIM_CSG_DEPTH (accel_build refuses deeper graphs).
+ * once into its own BVH and referenced by instances (a float inverse
+ * transform, its 3x3 part shared, and an object index: 20 bytes); defines
+ * nest to LIM_DEFINE_DEPTH, CSG to LIM_CSG_DEPTH (accel_build refuses
+ * deeper graphs).
  *
  * Owner of the geometry: common/geom*.c, common/bvh.c, common/csg.c,
  * common/accel.c. Primitive mappings and normals: the comment at the top of

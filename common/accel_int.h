@@ -68,9 +68,14 @@ struct xprim {
 	uint32_t obj;
 };
 
+/* An instance: its inverse transform (parent -> define space) rounded to
+ * float, as a translation and the index of its 3x3 part in accel.ilin
+ * (instances written with the same rotation share one entry: a million
+ * translated copies of a mesh hold 20 bytes each, not 52). */
 struct ginst {
-	float inv[12]; /* parent -> define space, row-major 3x4 */
-	uint32_t obj;  /* the instance object (its define gives the group) */
+	float t[3];    /* the inverse's translation column */
+	uint32_t lin;  /* its 3x3 part: accel.ilin[lin], row-major */
+	uint32_t obj;  /* the instance object (scene_inst_at gives its define) */
 };
 
 struct group {
@@ -105,6 +110,8 @@ struct accel {
 	struct geom_obj **gobj;   /* per object, built on demand; NULL until needed (owned) */
 	struct group **dgroup;    /* per define, built on first use (owned) */
 	struct group *root;
+	float (*ilin)[9];         /* instances' float inverse 3x3 parts (owned) */
+	uint32_t n_ilin, cap_ilin;
 	struct accel_stats st;
 };
 
