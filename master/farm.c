@@ -538,7 +538,8 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 		fprintf(stderr, "portray-master: the encoded scene (%zu bytes) is over the wire limit\n", scene_len);
 		goto out;
 	}
-	proto_scene_hash(scene, scene_len, f.hash);
+	if (scene) /* NULL: a local render (render.c keeps no encoding) */
+		proto_scene_hash(scene, scene_len, f.hash);
 	if (o->region) /* render.c checked it is inside the image */
 		tiling_init_region(&f.tg, w, h, o->tile, o->rx0, o->ry0, o->rx1, o->ry1);
 	else
