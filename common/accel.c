@@ -14,10 +14,11 @@
  *   xprims     everything else (transformed spheres, planes, disks,
  *              cylinders, boxes, polygons, CSG nodes): the ray goes into
  *              the object's space through its inverse transform
- *   instances  (inverse transform in float: a translation and a shared
- *              3x3 part; instance object): 20 bytes each, evaluated in double; the instance's geometry is exactly
- *              the inverse of that float matrix, used consistently for rays,
- *              normals and bounds; a group of ACCEL_PACK_MIN or more
+ *   instances  (the instance object: 4 bytes; the scene holds its define,
+ *              material and transform), evaluated in double; the
+ *              instance's geometry is exactly the inverse of its inverse
+ *              transform rounded to float (inst_inverse, computed on each
+ *              visit), used consistently for rays, normals and bounds; a group of ACCEL_PACK_MIN or more
  *              instances and no other bounded reference keeps them in leaf
  *              order without reference words, in leaves of up to
  *              ACCEL_INST_LEAF (issue 3: <= 64 bytes per instance)
@@ -385,16 +386,7 @@ static inline uint32_t group_ref(const struct group *g, uint32_t k)
 	return g->refs ? g->refs[k] : REF_MAKE(REF_INST, k);
 }
 
-/* The instance's inverse transform: its float values, in double. */
-static void inst_matrix(const struct accel *A, const struct ginst *in, mat34 *m)
-{
-	const float *l = A->ilin[in->lin];
-	for (int i = 0; i < 3; i++) {
-		for (int j = 0; j < 3; j++)
-			m->m[i][j] = l[3 * i + j];
-		m->m[i][3] = in->t[i];
-	}
-}
+
 
 /*
  * Intersects instance `in` with r (parent space); on a hit closer than
@@ -404,12 +396,12 @@ static bool inst_hit(const struct accel *A, const struct ginst *in, const struct
 {
 	if (cancel_poll()) /* CANCELLATION: nested instances multiply the work */
 		return false;
+	const struct scene_inst *si = scene_inst_at(A->s, in->obj);
 	mat34 inv;
-	inst_matrix(A, in, &inv);
+	inst_inverse(A->s, si, &inv);
 	struct trace lr;
 	trace_init(&lr, m34_point(&inv, r->o), m34_dir(&inv, r->d), r->tmin, r->tmax);
 	struct hit lh;
-	const struct scene_inst *si = scene_inst_at(A->s, in->obj);
 	if (!group_hit(A, A->dgroup[si->define], &lr, &lh, brute))
 		return false;
 	surface_complete(A->s, &lh); /* in the define's space */
@@ -434,11 +426,12 @@ static bool inst_occluded(const struct accel *A, const struct ginst *in, const s
 {
 	if (cancel_poll()) /* CANCELLATION */
 		return false;
+	const struct scene_inst *si = scene_inst_at(A->s, in->obj);
 	mat34 inv;
-	inst_matrix(A, in, &inv);
+	inst_inverse(A->s, si, &inv);
 	struct trace lr;
 	trace_init(&lr, m34_point(&inv, r->o), m34_dir(&inv, r->d), r->tmin, r->tmax);
-	return group_occluded(A, A->dgroup[scene_inst_at(A->s, in->obj)->define], &lr);
+	return group_occluded(A, A->dgroup[si->define], &lr);
 }
 
 /* The rarer kinds (xprims, CSG, instances), kept out of the traversal loop

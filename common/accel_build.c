@@ -59,7 +59,6 @@ void accel_free(struct accel *a)
 		free(a->dgroup);
 	}
 	group_free(a->root);
-	free(a->ilin);
 	free(a);
 }
 
@@ -245,42 +244,6 @@ static struct group *define_group(struct accel *A, uint32_t d, struct scene_erro
 	if (!A->dgroup[d])
 		A->dgroup[d] = build_group(A, A->s->defines[d].objects, A->s->defines[d].n_objects, err);
 	return A->dgroup[d];
-}
-
-/*
- * Rounds inv to float into gi (its 3x3 part shared through A->ilin: the
- * entry of the instance before when the bits are the same, else a new one)
- * and gives the rounded matrix in *rounded. Returns 0 or -1 (out of memory).
- */
-static int float_inverse(struct accel *A, const mat34 *inv, struct ginst *gi, mat34 *rounded)
-{
-	float l[9];
-	for (int i = 0; i < 3; i++) {
-		for (int j = 0; j < 3; j++) {
-			l[3 * i + j] = (float)inv->m[i][j];
-			rounded->m[i][j] = l[3 * i + j];
-		}
-		gi->t[i] = (float)inv->m[i][3];
-		rounded->m[i][3] = gi->t[i];
-	}
-	if (A->n_ilin && memcmp(l, A->ilin[A->n_ilin - 1], sizeof l) == 0) {
-		gi->lin = A->n_ilin - 1;
-		return 0;
-	}
-	if (A->n_ilin == A->cap_ilin) {
-		if (A->cap_ilin >= LIM_OBJECTS)
-			return -1;
-		uint32_t nc = A->cap_ilin ? A->cap_ilin * 2 : 16;
-		float(*p)[9] = realloc(A->ilin, (size_t)nc * sizeof *p);
-		if (!p)
-			return -1;
-		A->ilin = p;
-		A->cap_ilin = nc;
-	}
-	memcpy(A->ilin[A->n_ilin], l, sizeof l);
-	A->st.bytes += sizeof l;
-	gi->lin = A->n_ilin++;
-	return 0;
 }
 
 /*
@@ -504,11 +467,8 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 				continue; /* an empty define draws nothing */
 			struct ginst *gi = &g->inst[g->n_inst];
 			gi->obj = oi;
-			mat34 inv = m34_identity(), rinv, fwd;
-			if (o->has_xform && !m34_invert(&o->xform, &inv))
-				inv = m34_identity();
-			if (float_inverse(A, &inv, gi, &rinv) < 0)
-				goto oom;
+			mat34 rinv, fwd;
+			inst_inverse(s, scene_inst_at(s, oi), &rinv);
 			if (!m34_invert(&rinv, &fwd)) {
 				scene_errorf(err, ERRLEVEL_FATAL, "error: instance transform is singular in single precision");
 				goto fail;

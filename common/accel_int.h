@@ -68,15 +68,37 @@ struct xprim {
 	uint32_t obj;
 };
 
-/* An instance: its inverse transform (parent -> define space) rounded to
- * float, as a translation and the index of its 3x3 part in accel.ilin
- * (instances written with the same rotation share one entry: a million
- * translated copies of a mesh hold 20 bytes each, not 52). */
+/* An instance: its object index, 4 bytes (issue 13: a million instances
+ * in 100 bytes each, the whole process). Its define, material and
+ * transform are the scene's (scene_inst_at); its geometry is exactly the
+ * inverse transform rounded to float (inst_inverse), which the build and
+ * every ray compute alike. */
 struct ginst {
-	float t[3];    /* the inverse's translation column */
-	uint32_t lin;  /* its 3x3 part: accel.ilin[lin], row-major */
-	uint32_t obj;  /* the instance object (scene_inst_at gives its define) */
+	uint32_t obj;
 };
+
+/*
+ * The inverse transform (parent -> define space) of instance record si,
+ * rounded to float and back: what the instance's geometry is, for rays,
+ * normals and bounds alike. The identity without a transform (and for a
+ * singular one, which the scene builder refuses).
+ */
+static inline void inst_inverse(const struct scene *s, const struct scene_inst *si, mat34 *m)
+{
+	if (si->lin == SCENE_LIN_NONE) {
+		*m = m34_identity();
+		return;
+	}
+	mat34 fwd;
+	scene_inst_xform(s, si, &fwd);
+	if (!m34_invert(&fwd, m)) {
+		*m = m34_identity();
+		return;
+	}
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 4; j++)
+			m->m[i][j] = (float)m->m[i][j];
+}
 
 struct group {
 	struct bvh bvh;
@@ -110,8 +132,6 @@ struct accel {
 	struct geom_obj **gobj;   /* per object, built on demand; NULL until needed (owned) */
 	struct group **dgroup;    /* per define, built on first use (owned) */
 	struct group *root;
-	float (*ilin)[9];         /* instances' float inverse 3x3 parts (owned) */
-	uint32_t n_ilin, cap_ilin;
 	struct accel_stats st;
 };
 
