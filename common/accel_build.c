@@ -321,7 +321,8 @@ static struct group *define_group(struct accel *A, uint32_t d, struct scene_erro
 
 /*
  * Puts g's instance records in leaf order: first the bounded ones, record k
- * being the one of reference all[perm[k]], then the unbounded ones in
+ * being the one of reference all[perm[k]] (all NULL: reference j is
+ * instance j), then the unbounded ones in
  * g->unb's order (their references renumbered). In place, cycle by cycle,
  * with a 4-byte index per record (a copy of the records would hold the
  * group's biggest array twice at the build's peak). Every record has one
@@ -335,7 +336,7 @@ static int order_instances(struct group *g, const uint32_t *all, const uint32_t 
 	if (!src)
 		return -1;
 	for (uint32_t k = 0; k < n_bounded; k++)
-		src[k] = REF_IDX(all[perm[k]]);
+		src[k] = all ? REF_IDX(all[perm[k]]) : perm[k];
 	uint32_t next = n_bounded;
 	for (uint32_t k = 0; k < g->n_unb; k++)
 		if (REF_KIND(g->unb[k]) == REF_INST) {
@@ -642,6 +643,15 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	bool inst_only = n_bounded >= ACCEL_PACK_MIN;
 	for (uint32_t k = 0; k < n_bounded && inst_only; k++)
 		inst_only = REF_KIND(all[k]) == REF_INST;
+	if (inst_only) { /* all[] is often instance k at k: then it goes before the build's peak */
+		bool ident = true;
+		for (uint32_t k = 0; k < n_bounded && ident; k++)
+			ident = all[k] == REF_MAKE(REF_INST, k);
+		if (ident) {
+			free(all);
+			all = NULL;
+		}
+	}
 	perm = malloc((n_bounded ? n_bounded : 1) * sizeof *perm);
 	if (!inst_only)
 		g->refs = malloc((n_bounded ? n_bounded : 1) * sizeof *g->refs);
