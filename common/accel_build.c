@@ -652,6 +652,13 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			all = NULL;
 		}
 	}
+	/* before the build: bvh_build_f frees the float boxes */
+	g->bounds = geom_box_empty();
+	for (uint32_t k = 0; k < n_bounded; k++) {
+		if (cancel_poll_every(k))
+			goto cancelled;
+		g->bounds = geom_box_union(g->bounds, ref_box(boxes, fboxes, k));
+	}
 	perm = malloc((n_bounded ? n_bounded : 1) * sizeof *perm);
 	if (!inst_only)
 		g->refs = malloc((n_bounded ? n_bounded : 1) * sizeof *g->refs);
@@ -659,7 +666,8 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 		goto oom;
 	uint32_t max_leaf = inst_only ? ACCEL_INST_LEAF : ACCEL_MAX_LEAF;
 	int brc = boxes ? bvh_build_ex(&g->bvh, boxes, n_bounded, perm, max_leaf, inst_only)
-			: bvh_build_f(&g->bvh, (const float(*)[6])fboxes, n_bounded, perm, max_leaf, inst_only);
+			: bvh_build_f(&g->bvh, fboxes, n_bounded, perm, max_leaf, inst_only);
+	fboxes = NULL; /* bvh_build_f freed them */
 	if (brc == BVH_CANCELLED)
 		goto cancelled;
 	if (brc < 0)
@@ -669,12 +677,6 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	for (uint32_t k = 0; k < g->bvh.n_nodes4; k++)
 		for (int c = 0; c < 4; c++)
 			g->big_leaf |= g->bvh.nodes[k].n[c] > ACCEL_LEAF_CHUNK;
-	g->bounds = geom_box_empty();
-	for (uint32_t k = 0; k < n_bounded; k++) {
-		if (cancel_poll_every(k))
-			goto cancelled;
-		g->bounds = geom_box_union(g->bounds, ref_box(boxes, fboxes, k));
-	}
 	if (inst_only) { /* bounded instances in leaf order, then the unbounded ones */
 		int orc = order_instances(g, all, perm, n_bounded);
 		if (orc == ACCEL_CANCELLED)

@@ -572,7 +572,7 @@ int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t 
 	return bvh_build_ex(b, boxes, n, perm, max_leaf, false);
 }
 
-static int build(struct bvh *b, const struct geom_box *boxes, const float (*fboxes)[6], uint32_t n, uint32_t *perm,
+static int build(struct bvh *b, const struct geom_box *boxes, float (*fboxes)[6], uint32_t n, uint32_t *perm,
 		 uint32_t max_leaf, bool pack)
 {
 	memset(b, 0, sizeof *b);
@@ -588,11 +588,14 @@ static int build(struct bvh *b, const struct geom_box *boxes, const float (*fbox
 	B.max_leaf = max_leaf ? max_leaf : 1;
 	B.pack = pack;
 	B.nodes = malloc((size_t)2 * n * sizeof *B.nodes);
-	if (!B.nodes)
+	if (!B.nodes) {
+		free(fboxes);
 		return -1;
+	}
 	for (uint32_t i = 0; i < n; i++)
 		perm[i] = i;
 	build_all(&B, n);
+	free(fboxes); /* bvh_build_f's: the collapse below reads the binary nodes only */
 	if (cancel_seen()) {
 		free(B.nodes);
 		return BVH_CANCELLED;
@@ -631,8 +634,13 @@ int bvh_build_ex(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32
 	return build(b, boxes, NULL, n, perm, max_leaf, pack);
 }
 
-int bvh_build_f(struct bvh *b, const float (*boxes)[6], uint32_t n, uint32_t *perm, uint32_t max_leaf, bool pack)
+int bvh_build_f(struct bvh *b, float (*boxes)[6], uint32_t n, uint32_t *perm, uint32_t max_leaf, bool pack)
 {
+	if (n == 0) {
+		free(boxes);
+		memset(b, 0, sizeof *b);
+		return 0;
+	}
 	return build(b, NULL, boxes, n, perm, max_leaf, pack);
 }
 
