@@ -398,7 +398,7 @@ static bool inst_hit(const struct accel *A, const struct ginst *in, const struct
 		return false;
 	const struct scene_inst *si = scene_inst_at(A->s, in->obj);
 	mat34 inv;
-	inst_inverse(A->s, si, &inv);
+	inst_inverse(A, si, &inv);
 	struct trace lr;
 	trace_init(&lr, m34_point(&inv, r->o), m34_dir(&inv, r->d), r->tmin, r->tmax);
 	struct hit lh;
@@ -428,7 +428,7 @@ static bool inst_occluded(const struct accel *A, const struct ginst *in, const s
 		return false;
 	const struct scene_inst *si = scene_inst_at(A->s, in->obj);
 	mat34 inv;
-	inst_inverse(A->s, si, &inv);
+	inst_inverse(A, si, &inv);
 	struct trace lr;
 	trace_init(&lr, m34_point(&inv, r->o), m34_dir(&inv, r->d), r->tmin, r->tmax);
 	return group_occluded(A, A->dgroup[si->define], &lr);

@@ -59,6 +59,7 @@ void accel_free(struct accel *a)
 		free(a->dgroup);
 	}
 	group_free(a->root);
+	free(a->lin_inv);
 	free(a);
 }
 
@@ -543,7 +544,7 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			struct ginst *gi = &g->inst[g->n_inst];
 			gi->obj = oi;
 			mat34 rinv, fwd;
-			inst_inverse(s, scene_inst_at(s, oi), &rinv);
+			inst_inverse(A, scene_inst_at(s, oi), &rinv);
 			if (!m34_invert(&rinv, &fwd)) {
 				scene_errorf(err, ERRLEVEL_FATAL, "error: instance transform is singular in single precision");
 				goto fail;
@@ -803,6 +804,17 @@ int accel_build(const struct scene *s, struct accel **out, struct scene_error *e
 		return scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
 	}
 	A->st.bytes = sizeof *A + (size_t)s->n_defines * sizeof(void *);
+	if (s->n_lins) { /* inst_inverse's 3x3 parts, one per distinct one */
+		A->lin_inv = malloc((size_t)s->n_lins * sizeof *A->lin_inv);
+		if (!A->lin_inv) {
+			accel_free(A);
+			return scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
+		}
+		for (uint32_t k = 0; k < s->n_lins; k++)
+			if (!m34_invert(&s->lins[k], &A->lin_inv[k]))
+				A->lin_inv[k].m[0][3] = NAN;
+		A->st.bytes += (size_t)s->n_lins * sizeof *A->lin_inv;
+	}
 	A->st.instance_bytes = sizeof(struct ginst);
 	A->root = build_group(A, s->roots, s->n_roots, err);
 	if (!A->root || cancel_seen()) {

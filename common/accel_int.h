@@ -77,29 +77,6 @@ struct ginst {
 	uint32_t obj;
 };
 
-/*
- * The inverse transform (parent -> define space) of instance record si,
- * rounded to float and back: what the instance's geometry is, for rays,
- * normals and bounds alike. The identity without a transform (and for a
- * singular one, which the scene builder refuses).
- */
-static inline void inst_inverse(const struct scene *s, const struct scene_inst *si, mat34 *m)
-{
-	if (si->lin == SCENE_LIN_NONE) {
-		*m = m34_identity();
-		return;
-	}
-	mat34 fwd;
-	scene_inst_xform(s, si, &fwd);
-	if (!m34_invert(&fwd, m)) {
-		*m = m34_identity();
-		return;
-	}
-	for (int i = 0; i < 3; i++)
-		for (int j = 0; j < 4; j++)
-			m->m[i][j] = (float)m->m[i][j];
-}
-
 struct group {
 	struct bvh bvh;
 	uint32_t *refs; /* bounded references in leaf order; NULL in a group of
@@ -132,8 +109,50 @@ struct accel {
 	struct geom_obj **gobj;   /* per object, built on demand; NULL until needed (owned) */
 	struct group **dgroup;    /* per define, built on first use (owned) */
 	struct group *root;
+	/* the inverses of the scene's instance 3x3 parts (scene.lins), as
+	 * m34_invert makes them; m[0][3] NaN: singular (owned) */
+	mat34 *lin_inv;
 	struct accel_stats st;
 };
+
+/*
+ * The inverse transform (parent -> define space) of instance record si,
+ * rounded to float and back: what the instance's geometry is, for rays,
+ * normals and bounds alike; the build and every visit compute it alike.
+ * The values are m34_invert's: its 3x3 part depends on the transform's
+ * 3x3 part alone (A->lin_inv, or the identity's, exact), its translation
+ * is the same expression. The identity without a transform, and for a
+ * singular one (which the scene builder refuses).
+ */
+static inline void inst_inverse(const struct accel *A, const struct scene_inst *si, mat34 *m)
+{
+	if (si->lin == SCENE_LIN_NONE) {
+		*m = m34_identity();
+		return;
+	}
+	vec3 t = si->t;
+	if (si->lin == SCENE_LIN_IDENTITY) {
+		/* m34_invert of the identity's 3x3 part is exactly it (+0 off the
+		 * diagonal); the translation the same products (0 * y keeps y's
+		 * sign), and nothing to round in the 3x3 part */
+		*m = m34_identity();
+		m->m[0][3] = (float)-(1.0 * t.x + 0.0 * t.y + 0.0 * t.z);
+		m->m[1][3] = (float)-(0.0 * t.x + 1.0 * t.y + 0.0 * t.z);
+		m->m[2][3] = (float)-(0.0 * t.x + 0.0 * t.y + 1.0 * t.z);
+		return;
+	}
+	*m = A->lin_inv[si->lin];
+	if (isnan(m->m[0][3])) {
+		*m = m34_identity();
+		return;
+	}
+	const double (*r)[4] = m->m;
+	for (int i = 0; i < 3; i++)
+		m->m[i][3] = -(r[i][0] * t.x + r[i][1] * t.y + r[i][2] * t.z);
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 4; j++)
+			m->m[i][j] = (float)m->m[i][j];
+}
 
 
 static inline const uint32_t *tri_ix(const struct gmesh *m, uint32_t tri) { return m->ix + 3 * (size_t)tri; }
