@@ -282,10 +282,56 @@ static void test_xform_forms(void)
 	scene_free(s);
 }
 
+/* Roots travel as runs of consecutive indices: any order round trips; an
+ * empty run, a run past the objects and a run that continues the one
+ * before (not canonical) are refused. */
+static void test_root_runs(void)
+{
+	struct scene *s = scene_new();
+	struct scene_error err;
+	for (int k = 0; k < 6; k++) {
+		struct scene_object o;
+		scene_object_defaults(&o, PRIM_SPHERE);
+		CHECK(scene_add_object(s, &o, NULL, &err) == 0);
+	}
+	static const uint32_t roots[] = { 0, 1, 2, 5, 3, 3, 4 }; /* runs (0,3) (5,1) (3,1) (3,2) */
+	for (size_t k = 0; k < sizeof roots / sizeof *roots; k++)
+		CHECK(scene_add_root(s, roots[k], &err) == 0);
+	size_t len = 0;
+	uint8_t *a = round_trip(s, &len);
+	struct scene *t = NULL;
+	CHECK(a != NULL && proto_scene_decode(a, len, &t, &err) == 0);
+	if (t) {
+		CHECK(t->n_roots == 7 && memcmp(t->roots, roots, sizeof roots) == 0);
+		scene_free(t);
+		t = NULL;
+	}
+	if (a && len > 40) {
+		uint8_t *tail = a + len - 8; /* the last run: (3, 2) */
+		CHECK(tail[3] == 3 && tail[7] == 2);
+		tail[7] = 0; /* empty */
+		CHECK(proto_scene_decode(a, len, &t, &err) != 0 && strstr(err.msg, "run of roots") != NULL);
+		tail[7] = 4; /* 3 + 4 > 6 objects */
+		CHECK(proto_scene_decode(a, len, &t, &err) != 0 && strstr(err.msg, "run of roots") != NULL);
+		tail[7] = 1;
+		tail[3] = 4; /* (3,1) then (4,1): one run written as two */
+		CHECK(proto_scene_decode(a, len, &t, &err) != 0 && strstr(err.msg, "run of roots") != NULL);
+		tail[3] = 0; /* (0,1): fine */
+		int rc = proto_scene_decode(a, len, &t, &err);
+		if (rc)
+			fprintf(stderr, "%s\n", err.msg);
+		CHECK(rc == 0 && t && t->n_roots == 6 && t->roots[5] == 0);
+		scene_free(t);
+	}
+	free(a);
+	scene_free(s);
+}
+
 int main(void)
 {
 	test_parsed();
 	test_xform_forms();
+	test_root_runs();
 	test_fixture();
 	test_hostile_counts();
 	test_deep_nesting();
