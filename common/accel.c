@@ -303,8 +303,8 @@ struct cand {
  * CANONICAL TIES. The closest hit is the least (t, key) pair: at equal t the
  * lower key wins. A reference's key is the reference itself (kind, then
  * index: the order written), except an instance's, which is made of its
- * instance object's index, since a packed group numbers its instances in
- * leaf order. So the hit never depends on the order in which
+ * record's index in scene.insts (in the order of the instances' object
+ * indices), since a packed group numbers its instances in leaf order. So the hit never depends on the order in which
  * references are tested, and a traversal may visit the tree in any order
  * (packets, accel_intersect4) and still give every ray the same hit bit for
  * bit. Primitive tests accept t < r->tmax and report a primitive's first
@@ -396,7 +396,7 @@ static bool inst_hit(const struct accel *A, const struct ginst *in, const struct
 {
 	if (cancel_poll()) /* CANCELLATION: nested instances multiply the work */
 		return false;
-	const struct scene_inst *si = scene_inst_at(A->s, in->obj);
+	const struct scene_inst *si = &A->s->insts[in->rec];
 	mat34 inv;
 	inst_inverse(A, si, &inv);
 	struct trace lr;
@@ -426,7 +426,7 @@ static bool inst_occluded(const struct accel *A, const struct ginst *in, const s
 {
 	if (cancel_poll()) /* CANCELLATION */
 		return false;
-	const struct scene_inst *si = scene_inst_at(A->s, in->obj);
+	const struct scene_inst *si = &A->s->insts[in->rec];
 	mat34 inv;
 	inst_inverse(A, si, &inv);
 	struct trace lr;
@@ -475,7 +475,7 @@ static __attribute__((noinline)) bool ref_test_slow(const struct accel *A, const
 	struct hit hh;
 	if (!inst_hit(A, &g->inst[i], r, &hh, brute))
 		return false;
-	uint32_t key = REF_MAKE(REF_INST, g->inst[i].obj);
+	uint32_t key = REF_MAKE(REF_INST, g->inst[i].rec);
 	if (!cand_better(c, key, hh.t))
 		return false;
 	c->sub = hh;
@@ -636,7 +636,7 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 			h->n = h->ng = n;
 			h->mp = lp;
 			h->object = g->xp[i].obj;
-			h->material = s->objs[s->slot[h->object]].material; /* an xprim: not an instance */
+			h->material = scene_full_at(s, h->object)->material; /* an xprim: not an instance */
 		}
 		break;
 	default:
@@ -663,7 +663,7 @@ static void surface_complete(const struct scene *s, struct hit *h)
 		geom_surface(h->surf, h->mp, (int)h->surf_idx, &n, &h->u, &h->v);
 	} else if (h->surf_kind == SURF_SPHERE) {
 		/* the default frame: P = +y, E = +x, W = P x E = -z (as geom_surface) */
-		const struct prim_sphere *ps = &s->objs[s->slot[h->object]].u.sphere;
+		const struct prim_sphere *ps = &scene_full_at(s, h->object)->u.sphere;
 		vec3 q = h->n;
 		double phi = xm_atan2(-q.z, q.x);
 		if (phi < 0)

@@ -542,7 +542,7 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			if (sub->n_refs == 0 && sub->n_unb == 0)
 				continue; /* an empty define draws nothing */
 			struct ginst *gi = &g->inst[g->n_inst];
-			gi->obj = oi;
+			gi->rec = scene_inst_rank(s, oi);
 			mat34 rinv, fwd;
 			inst_inverse(A, scene_inst_at(s, oi), &rinv);
 			if (!m34_invert(&rinv, &fwd)) {

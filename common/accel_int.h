@@ -17,8 +17,8 @@ enum { REF_SPHERE = 0, REF_TRI = 1, REF_XPRIM = 2, REF_INST = 3 };
 #define REF_IDX(r) ((r) & 0x3fffffffu)
 /* references per group: 30 bits of index */
 #define ACCEL_MAX_REFS (1u << 30)
-/* an instance's tie key is REF_MAKE(REF_INST, its object index) (accel.c) */
-_Static_assert(LIM_OBJECTS <= ACCEL_MAX_REFS, "object indices fit a reference's index bits");
+/* an instance's tie key is REF_MAKE(REF_INST, its scene record) (accel.c) */
+_Static_assert(LIM_OBJECTS <= ACCEL_MAX_REFS, "object and record indices fit a reference's index bits");
 /* primitives per BVH leaf */
 #define ACCEL_MAX_LEAF 4
 /* instances per leaf in a group of at least ACCEL_PACK_MIN instances and
@@ -68,13 +68,15 @@ struct xprim {
 	uint32_t obj;
 };
 
-/* An instance: its object index, 4 bytes (issue 13: a million instances
- * in 100 bytes each, the whole process). Its define, material and
- * transform are the scene's (scene_inst_at); its geometry is exactly the
- * inverse transform rounded to float (inst_inverse), which the build and
- * every ray compute alike. */
+/* An instance: the index of its record in scene.insts, 4 bytes (issue
+ * 13: a million instances in 100 bytes each, the whole process). Its
+ * define, material and transform are the scene's; its geometry is exactly
+ * the inverse transform rounded to float (inst_inverse), which the build
+ * and every ray compute alike. Records are in the order of their object
+ * indices, so tie keys made from rec order instances as object indices
+ * did (CANONICAL TIES in accel.c). */
 struct ginst {
-	uint32_t obj;
+	uint32_t rec;
 };
 
 struct group {

@@ -135,7 +135,7 @@ static int cmp_x(const void *pa, const void *pb)
 /* Crossings of a raw mesh (object space ray o + t d), sorted by t. */
 static void mesh_crossings(const struct scene *s, uint32_t obj, vec3 o, vec3 d, struct csg_buf *b)
 {
-	const struct scene_mesh *m = &s->meshes[s->objs[s->slot[obj]].u.raw.mesh]; /* not an instance */
+	const struct scene_mesh *m = &s->meshes[scene_full_at(s, obj)->u.raw.mesh];
 	struct geom_wray w;
 	geom_wray_init(&w, o, d);
 	size_t start = b->n;
@@ -183,7 +183,7 @@ static bool eval(const struct csg_env *E, uint32_t obj, vec3 o, vec3 d, struct c
 		return false;
 	const struct geom_obj *g = E->gobj[obj];
 	struct scene_object tmp;
-	const struct scene_object *so = scene_object(E->s, obj, &tmp);
+	const struct scene_object *so = g->so ? g->so : scene_object(E->s, obj, &tmp);
 	vec3 lo = o, ld = d;
 	if (g->has_xform) {
 		lo = m34_point(&g->inv, o);

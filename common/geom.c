@@ -202,6 +202,7 @@ int geom_obj_init(const struct scene *s, uint32_t obj, struct geom_obj *g)
 	memset(g, 0, sizeof *g);
 	g->kind = o->kind;
 	g->obj = obj;
+	g->so = o == &tmp ? NULL : o;
 	g->has_xform = o->has_xform;
 	g->fwd = o->has_xform ? o->xform : m34_identity();
 	if (!o->has_xform || !m34_invert(&g->fwd, &g->inv)) {

@@ -218,7 +218,8 @@ void scene_free(struct scene *s)
 	free(s->lights);
 	free(s->materials);
 	free(s->meshes);
-	free(s->slot);
+	free(s->inst_bits);
+	free(s->inst_rank);
 	free(s->objs);
 	free(s->insts);
 	free(s->lins);
@@ -484,13 +485,35 @@ static int check_polygon(const struct prim_polygon *p)
 	return 1;
 }
 
-/* Appends o (not an instance) to objs[] and points slot[n_objects] at it
- * (slot[] has room). Returns 0 or -1 (out of memory). */
+/* Room in inst_bits and inst_rank for object n_objects (its word is
+ * started: no bit set, the rank of the instances so far). 0 or -1. */
+static int grow_bits(struct scene *s)
+{
+	uint32_t w = s->n_objects >> 6;
+	if (w >= s->cap_words) {
+		uint32_t nc = s->cap_words ? s->cap_words * 2 : 4;
+		uint64_t *nb = realloc(s->inst_bits, (size_t)nc * sizeof *nb);
+		if (!nb)
+			return -1;
+		s->inst_bits = nb;
+		uint32_t *nr = realloc(s->inst_rank, (size_t)nc * sizeof *nr);
+		if (!nr)
+			return -1;
+		s->inst_rank = nr;
+		s->cap_words = nc;
+	}
+	if ((s->n_objects & 63) == 0) {
+		s->inst_bits[w] = 0;
+		s->inst_rank[w] = s->n_insts;
+	}
+	return 0;
+}
+
+/* Appends o (not an instance) to objs[] as object n_objects. 0 or -1. */
 static int add_full(struct scene *s, const struct scene_object *o)
 {
 	if (grow((void **)&s->objs, s->n_objs, &s->cap_objs, sizeof *s->objs, LIM_OBJECTS) < 0)
 		return -1;
-	s->slot[s->n_objects] = s->n_objs;
 	s->objs[s->n_objs++] = *o;
 	return 0;
 }
@@ -509,8 +532,8 @@ static uint32_t file_index(struct scene *s, const char *f)
 	return SCENE_NONE;
 }
 
-/* Appends instance o as a compact record (INSTANCES in scene.h) and points
- * slot[n_objects] at it (slot[] has room). Returns 0 or -1. */
+/* Appends instance o as a compact record (INSTANCES in scene.h), object
+ * n_objects. Returns 0 or -1. */
 static int add_inst(struct scene *s, const struct scene_object *o)
 {
 	struct scene_inst in;
@@ -546,7 +569,7 @@ static int add_inst(struct scene *s, const struct scene_object *o)
 	}
 	if (grow((void **)&s->insts, s->n_insts, &s->cap_insts, sizeof *s->insts, LIM_OBJECTS) < 0)
 		return -1;
-	s->slot[s->n_objects] = s->n_insts | SCENE_SLOT_INST;
+	s->inst_bits[s->n_objects >> 6] |= UINT64_C(1) << (s->n_objects & 63);
 	s->insts[s->n_insts++] = in;
 	return 0;
 }
@@ -636,7 +659,7 @@ int scene_add_object(struct scene *s, struct scene_object *o, uint32_t *id, stru
 		scene_errorf(err, 1, LOCFMT "%s object has %s", LOCARGS(&o->loc), scene_prim_name(o->kind), why);
 		goto fail;
 	}
-	if (grow((void **)&s->slot, s->n_objects, &s->cap_slot, sizeof *s->slot, LIM_OBJECTS) < 0 ||
+	if (s->n_objects >= LIM_OBJECTS || grow_bits(s) < 0 ||
 	    (o->kind == PRIM_INSTANCE ? add_inst(s, o) : add_full(s, o)) < 0) {
 		scene_errorf(err, 1, LOCFMT "too many objects or out of memory", LOCARGS(&o->loc));
 		goto fail;
@@ -745,7 +768,7 @@ static struct drawn object_drawn(const struct scene *s, uint32_t i, struct drawn
 		}
 		return memo[d].n;
 	}
-	const struct scene_object *o = &s->objs[s->slot[i]];
+	const struct scene_object *o = scene_full_at(s, i);
 	switch (o->kind) {
 	case PRIM_TRIANGLE:
 		return (struct drawn){ 1, 1 };

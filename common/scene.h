@@ -206,15 +206,17 @@ struct scene_object {
  * a 280-byte struct scene_object but a 48-byte struct scene_inst: its
  * translation, its define and material, its source location, and the index
  * of its transform's 3x3 part in a table of such parts (where neighbours
- * written with the same rotation share one entry). Every object index goes
- * through slot[]: SCENE_SLOT_INST set, the rest indexes insts[]; else objs[]
- * (every other kind, as written). scene_object() gives any object as a
+ * written with the same rotation share one entry). Bit i of inst_bits says
+ * whether object i is an instance; its rank among the instances (the
+ * count in inst_rank[i / 64] of those below object 64 (i / 64), plus the
+ * bits below i in its word) indexes insts[], and i minus that rank indexes
+ * objs[] (every other kind, as written): 1.5 bits per object, no table of
+ * indices. scene_object() gives any object as a
  * struct scene_object (an instance expanded into the caller's buffer); the
  * expansion gives back the very bits that were added (the 3x3 part is
  * compared bit for bit, -0 included), so nothing reading a scene can tell.
  * An instance added without has_xform reads back with the identity.
  */
-#define SCENE_SLOT_INST 0x80000000u
 #define SCENE_LIN_NONE UINT32_MAX     /* scene_inst.lin: no transform (has_xform false) */
 #define SCENE_LIN_IDENTITY (UINT32_MAX - 1) /* a translation only: the 3x3 part is the identity */
 
@@ -226,7 +228,6 @@ struct scene_inst {
 	uint32_t file;     /* index into scene.files; SCENE_NONE: no file */
 	int32_t line, col;
 };
-_Static_assert(LIM_OBJECTS < SCENE_SLOT_INST, "object slots leave the instance bit free");
 
 /* A RAW mesh after welding/rotation; shared by every object that uses it. */
 struct scene_mesh {
@@ -336,9 +337,10 @@ struct scene {
 	uint32_t n_materials, cap_materials;
 	struct scene_mesh *meshes;
 	uint32_t n_meshes, cap_meshes;
-	/* objects: n_objects indices, each through slot[] (INSTANCES) */
-	uint32_t *slot;
-	uint32_t n_objects, cap_slot;
+	/* objects: n_objects indices, instances told apart by inst_bits (INSTANCES) */
+	uint64_t *inst_bits;         /* bit i: object i is an instance */
+	uint32_t *inst_rank;         /* per word: the instances below it */
+	uint32_t n_objects, cap_words;
 	struct scene_object *objs;   /* every object but instances */
 	uint32_t n_objs, cap_objs;
 	struct scene_inst *insts;    /* instances */
@@ -357,17 +359,35 @@ struct scene {
 };
 
 /* Whether object i is an instance (stored as a struct scene_inst). */
-static inline bool scene_is_inst(const struct scene *s, uint32_t i) { return (s->slot[i] & SCENE_SLOT_INST) != 0; }
+static inline bool scene_is_inst(const struct scene *s, uint32_t i) { return s->inst_bits[i >> 6] >> (i & 63) & 1; }
+/* The instances among objects 0 .. i-1: the word's rank plus the bits
+ * below i, counted inline (no popcount instruction is assumed: generic
+ * x86-64 builds call a library function for __builtin_popcountll). */
+static inline uint32_t scene_inst_rank(const struct scene *s, uint32_t i)
+{
+	uint64_t x = s->inst_bits[i >> 6] & ((UINT64_C(1) << (i & 63)) - 1);
+	uint32_t r = s->inst_rank[i >> 6];
+	if (!x)
+		return r;
+	x = x - ((x >> 1) & UINT64_C(0x5555555555555555));
+	x = (x & UINT64_C(0x3333333333333333)) + ((x >> 2) & UINT64_C(0x3333333333333333));
+	x = (x + (x >> 4)) & UINT64_C(0x0f0f0f0f0f0f0f0f);
+	return r + (uint32_t)((x * UINT64_C(0x0101010101010101)) >> 56);
+}
 /* The compact record of instance object i (scene_is_inst(s, i)). */
 static inline const struct scene_inst *scene_inst_at(const struct scene *s, uint32_t i)
 {
-	return &s->insts[s->slot[i] & ~SCENE_SLOT_INST];
+	return &s->insts[scene_inst_rank(s, i)];
+}
+/* Object i that is not an instance (!scene_is_inst(s, i)). */
+static inline const struct scene_object *scene_full_at(const struct scene *s, uint32_t i)
+{
+	return &s->objs[i - scene_inst_rank(s, i)];
 }
 /* The kind of object i. */
 static inline enum prim_kind scene_kind(const struct scene *s, uint32_t i)
 {
-	uint32_t k = s->slot[i];
-	return k & SCENE_SLOT_INST ? PRIM_INSTANCE : s->objs[k].kind;
+	return scene_is_inst(s, i) ? PRIM_INSTANCE : scene_full_at(s, i)->kind;
 }
 /* Expands instance record in into *o (a struct scene_object of kind
  * PRIM_INSTANCE, exactly as it was added). */
@@ -381,10 +401,9 @@ void scene_inst_xform(const struct scene *s, const struct scene_inst *in, mat34 
  */
 static inline const struct scene_object *scene_object(const struct scene *s, uint32_t i, struct scene_object *tmp)
 {
-	uint32_t k = s->slot[i];
-	if (!(k & SCENE_SLOT_INST))
-		return &s->objs[k];
-	scene_inst_expand(s, &s->insts[k & ~SCENE_SLOT_INST], tmp);
+	if (!scene_is_inst(s, i))
+		return scene_full_at(s, i);
+	scene_inst_expand(s, scene_inst_at(s, i), tmp);
 	return tmp;
 }
 /* Object i by value (tests and tools; polygon arrays stay the scene's). */
