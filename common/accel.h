@@ -41,7 +41,7 @@ struct hit {
 			      shaders; docs/rendering.md gives each primitive's mapping);
 			      only after accel_hit_surface */
 	uint32_t material; /* resolved material index, SCENE_NONE = default material */
-	uint32_t object;   /* index of the leaf object hit (scene.objects) */
+	uint32_t object;   /* object index of the leaf object hit */
 	/* private to accel.c: how accel_hit_surface completes u, v and mp
 	 * (surf_fn == NULL: they are complete). A hit made by hand (a test's
 	 * mock accel) must set surf_fn = NULL if shading may ask for them. */
