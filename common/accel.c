@@ -14,10 +14,11 @@
  *   xprims     everything else (transformed spheres, planes, disks,
  *              cylinders, boxes, polygons, CSG nodes): the ray goes into
  *              the object's space through its inverse transform
- *   instances  (inverse transform as 12 floats, instance object): 52 bytes
- *              each, evaluated in double; the instance's geometry is exactly
- *              the inverse of that float matrix, used consistently for rays,
- *              normals and bounds; a group of ACCEL_PACK_MIN or more
+ *   instances  (the instance object: 4 bytes; the scene holds its define,
+ *              material and transform), evaluated in double; the
+ *              instance's geometry is exactly the inverse of its inverse
+ *              transform rounded to float (inst_inverse, computed on each
+ *              visit), used consistently for rays, normals and bounds; a group of ACCEL_PACK_MIN or more
  *              instances and no other bounded reference keeps them in leaf
  *              order without reference words, in leaves of up to
  *              ACCEL_INST_LEAF (issue 3: <= 64 bytes per instance)
@@ -302,8 +303,8 @@ struct cand {
  * CANONICAL TIES. The closest hit is the least (t, key) pair: at equal t the
  * lower key wins. A reference's key is the reference itself (kind, then
  * index: the order written), except an instance's, which is made of its
- * instance object's index, since a packed group numbers its instances in
- * leaf order. So the hit never depends on the order in which
+ * record's index in scene.insts (in the order of the instances' object
+ * indices), since a packed group numbers its instances in leaf order. So the hit never depends on the order in which
  * references are tested, and a traversal may visit the tree in any order
  * (packets, accel_intersect4) and still give every ray the same hit bit for
  * bit. Primitive tests accept t < r->tmax and report a primitive's first
@@ -385,12 +386,7 @@ static inline uint32_t group_ref(const struct group *g, uint32_t k)
 	return g->refs ? g->refs[k] : REF_MAKE(REF_INST, k);
 }
 
-static void inst_matrix(const struct ginst *in, mat34 *m)
-{
-	for (int i = 0; i < 3; i++)
-		for (int j = 0; j < 4; j++)
-			m->m[i][j] = in->inv[4 * i + j];
-}
+
 
 /*
  * Intersects instance `in` with r (parent space); on a hit closer than
@@ -400,12 +396,13 @@ static bool inst_hit(const struct accel *A, const struct ginst *in, const struct
 {
 	if (cancel_poll()) /* CANCELLATION: nested instances multiply the work */
 		return false;
+	const struct scene_inst *si = &A->s->insts[in->rec];
 	mat34 inv;
-	inst_matrix(in, &inv);
+	inst_inverse(A, si, &inv);
 	struct trace lr;
 	trace_init(&lr, m34_point(&inv, r->o), m34_dir(&inv, r->d), r->tmin, r->tmax);
 	struct hit lh;
-	if (!group_hit(A, A->dgroup[A->s->objects[in->obj].u.instance.define], &lr, &lh, brute))
+	if (!group_hit(A, A->dgroup[si->define], &lr, &lh, brute))
 		return false;
 	surface_complete(A->s, &lh); /* in the define's space */
 	h->t = lh.t;
@@ -414,7 +411,7 @@ static bool inst_hit(const struct accel *A, const struct ginst *in, const struct
 	h->u = lh.u;
 	h->v = lh.v;
 	h->object = lh.object;
-	uint32_t im = A->s->objects[in->obj].material;
+	uint32_t im = si->material;
 	if (lh.material == SCENE_NONE && im != SCENE_NONE) {
 		h->material = im;
 		h->mp = lh.p; /* the instance's own object space is the define's space */
@@ -429,11 +426,12 @@ static bool inst_occluded(const struct accel *A, const struct ginst *in, const s
 {
 	if (cancel_poll()) /* CANCELLATION */
 		return false;
+	const struct scene_inst *si = &A->s->insts[in->rec];
 	mat34 inv;
-	inst_matrix(in, &inv);
+	inst_inverse(A, si, &inv);
 	struct trace lr;
 	trace_init(&lr, m34_point(&inv, r->o), m34_dir(&inv, r->d), r->tmin, r->tmax);
-	return group_occluded(A, A->dgroup[A->s->objects[in->obj].u.instance.define], &lr);
+	return group_occluded(A, A->dgroup[si->define], &lr);
 }
 
 /* The rarer kinds (xprims, CSG, instances), kept out of the traversal loop
@@ -477,7 +475,7 @@ static __attribute__((noinline)) bool ref_test_slow(const struct accel *A, const
 	struct hit hh;
 	if (!inst_hit(A, &g->inst[i], r, &hh, brute))
 		return false;
-	uint32_t key = REF_MAKE(REF_INST, g->inst[i].obj);
+	uint32_t key = REF_MAKE(REF_INST, g->inst[i].rec);
 	if (!cand_better(c, key, hh.t))
 		return false;
 	c->sub = hh;
@@ -648,7 +646,7 @@ static void finish(const struct accel *A, const struct group *g, const struct tr
 			h->n = h->ng = n;
 			h->mp = lp;
 			h->object = g->xp[i].obj;
-			h->material = s->objects[h->object].material;
+			h->material = scene_full_at(s, h->object)->material; /* an xprim: not an instance */
 		}
 		break;
 	default:
@@ -675,7 +673,7 @@ static void surface_complete(const struct scene *s, struct hit *h)
 		geom_surface(h->surf, h->mp, (int)h->surf_idx, &n, &h->u, &h->v);
 	} else if (h->surf_kind == SURF_SPHERE) {
 		/* the default frame: P = +y, E = +x, W = P x E = -z (as geom_surface) */
-		const struct prim_sphere *ps = &s->objects[h->object].u.sphere;
+		const struct prim_sphere *ps = &scene_full_at(s, h->object)->u.sphere;
 		vec3 q = h->n;
 		double phi = xm_atan2(-q.z, q.x);
 		if (phi < 0)

@@ -1,9 +1,10 @@
 /*
  * accel.h - geometry and acceleration: the scene model's objects turned into
  * intersectable primitives under a multi-level BVH: each define is built
- * once into its own BVH and referenced by instances (an inverse transform
- * and an object index, 52 bytes); defines nest to LIM_DEFINE_DEPTH, CSG to
- * LIM_CSG_DEPTH (accel_build refuses deeper graphs).
+ * once into its own BVH and referenced by instances (a float inverse
+ * transform, its 3x3 part shared, and an object index: 20 bytes); defines
+ * nest to LIM_DEFINE_DEPTH, CSG to LIM_CSG_DEPTH (accel_build refuses
+ * deeper graphs).
  *
  * Owner of the geometry: common/geom*.c, common/bvh.c, common/csg.c,
  * common/accel.c. Primitive mappings and normals: the comment at the top of
@@ -40,7 +41,7 @@ struct hit {
 			      shaders; docs/rendering.md gives each primitive's mapping);
 			      only after accel_hit_surface */
 	uint32_t material; /* resolved material index, SCENE_NONE = default material */
-	uint32_t object;   /* index of the leaf object hit (scene.objects) */
+	uint32_t object;   /* object index of the leaf object hit */
 	/* private to accel.c: how accel_hit_surface completes u, v and mp
 	 * (surf_fn == NULL: they are complete). A hit made by hand (a test's
 	 * mock accel) must set surf_fn = NULL if shading may ask for them. */

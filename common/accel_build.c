@@ -59,6 +59,7 @@ void accel_free(struct accel *a)
 		free(a->dgroup);
 	}
 	group_free(a->root);
+	free(a->lin_inv);
 	free(a);
 }
 
@@ -99,7 +100,8 @@ static int prep_tree(struct accel *A, uint32_t obj)
 		return ACCEL_CANCELLED;
 	if (!get_gobj(A, obj))
 		return -1;
-	const struct scene_object *o = &A->s->objects[obj];
+	struct scene_object tmp;
+	const struct scene_object *o = scene_object(A->s, obj, &tmp);
 	int rc = 0;
 	if (o->kind == PRIM_CSG) {
 		rc = prep_tree(A, o->u.csg.operand1);
@@ -127,28 +129,96 @@ static struct geom_box pad_box(struct geom_box b)
 
 static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t n, struct scene_error *err);
 
-/* Bounded references and their boxes while a group is built (grows). */
+/*
+ * Bounded references and their boxes while a group is built (grows). The
+ * boxes are doubles (box), or, in a group of ACCEL_PACK_MIN instances or
+ * more and no sphere or triangle (FLOAT BOXES), floats rounded outward
+ * (fbox): half the build's biggest array. fbox is NULL in double mode.
+ */
 struct refbuf {
 	uint32_t *ref;
 	struct geom_box *box;
+	float (*fbox)[6];
 	uint32_t n, cap;
 };
 
-/* Room for n references (n < ACCEL_MAX_REFS). */
-static int refbuf_reserve(struct refbuf *b, uint32_t n)
+/* FLOAT BOXES. A box rounded outward to float still holds its item, so
+ * the tree is as conservative as before (no hit is culled: pixels cannot
+ * move) though its splits may differ from a double build's. Coordinates
+ * beyond FBOX_MAX (where float loses the range) switch the group to
+ * doubles (refbuf_to_double). */
+#define FBOX_MAX 1e30
+
+static float f_down(double x)
 {
-	if (n <= b->cap)
-		return 0;
-	uint32_t *nr = realloc(b->ref, (size_t)n * sizeof *nr);
+	float f = (float)x;
+	return (double)f > x ? nextafterf(f, -INFINITY) : f;
+}
+
+static float f_up(double x)
+{
+	float f = (float)x;
+	return (double)f < x ? nextafterf(f, INFINITY) : f;
+}
+
+/* Grows the arrays to cap nc. */
+static int refbuf_grow(struct refbuf *b, uint32_t nc)
+{
+	uint32_t *nr = realloc(b->ref, (size_t)nc * sizeof *nr);
 	if (!nr)
 		return -1;
 	b->ref = nr;
-	struct geom_box *nbx = realloc(b->box, (size_t)n * sizeof *nbx);
+	if (b->fbox) {
+		float(*nf)[6] = realloc(b->fbox, (size_t)nc * sizeof *nf);
+		if (!nf)
+			return -1;
+		b->fbox = nf;
+	} else {
+		struct geom_box *nbx = realloc(b->box, (size_t)nc * sizeof *nbx);
+		if (!nbx)
+			return -1;
+		b->box = nbx;
+	}
+	b->cap = nc;
+	return 0;
+}
+
+/* Room for n references (n < ACCEL_MAX_REFS); floats when fl. */
+static int refbuf_reserve(struct refbuf *b, uint32_t n, bool fl)
+{
+	if (fl && !b->fbox && !b->box) {
+		b->fbox = malloc(sizeof *b->fbox); /* marks float mode; grown below */
+		if (!b->fbox)
+			return -1;
+	}
+	return n <= b->cap ? 0 : refbuf_grow(b, n);
+}
+
+/* Float mode to double mode: the boxes so far as doubles (rare: a group
+ * with coordinates beyond FBOX_MAX). */
+static int refbuf_to_double(struct refbuf *b)
+{
+	struct geom_box *nbx = malloc((size_t)(b->cap ? b->cap : 1) * sizeof *nbx);
 	if (!nbx)
 		return -1;
+	for (uint32_t k = 0; k < b->n; k++) {
+		const float *f = b->fbox[k];
+		nbx[k].lo = v3(f[0], f[1], f[2]);
+		nbx[k].hi = v3(f[3], f[4], f[5]);
+	}
+	free(b->fbox);
+	b->fbox = NULL;
 	b->box = nbx;
-	b->cap = n;
 	return 0;
+}
+
+/* Box k of the bounded references: boxes[k], or fboxes[k] as doubles. */
+static struct geom_box ref_box(const struct geom_box *boxes, const float (*fboxes)[6], uint32_t k)
+{
+	if (boxes)
+		return boxes[k];
+	struct geom_box b = { v3(fboxes[k][0], fboxes[k][1], fboxes[k][2]), v3(fboxes[k][3], fboxes[k][4], fboxes[k][5]) };
+	return b;
 }
 
 static int refbuf_push(struct refbuf *b, uint32_t ref, struct geom_box box)
@@ -157,17 +227,22 @@ static int refbuf_push(struct refbuf *b, uint32_t ref, struct geom_box box)
 		if (b->cap >= ACCEL_MAX_REFS)
 			return -1;
 		uint32_t nc = b->cap ? (b->cap > ACCEL_MAX_REFS / 2 ? ACCEL_MAX_REFS : b->cap * 2) : 64;
-		uint32_t *nr = realloc(b->ref, (size_t)nc * sizeof *nr);
-		if (!nr)
+		if (refbuf_grow(b, nc) < 0)
 			return -1;
-		b->ref = nr;
-		struct geom_box *nbx = realloc(b->box, (size_t)nc * sizeof *nbx);
-		if (!nbx)
+	}
+	if (b->fbox) {
+		double m = fmax(fmax(fmax(fabs(box.lo.x), fabs(box.lo.y)), fabs(box.lo.z)),
+				fmax(fmax(fabs(box.hi.x), fabs(box.hi.y)), fabs(box.hi.z)));
+		if (!(m <= FBOX_MAX) && refbuf_to_double(b) < 0)
 			return -1;
-		b->box = nbx;
-		b->cap = nc;
 	}
 	b->ref[b->n] = ref;
+	if (b->fbox) {
+		float *f = b->fbox[b->n++];
+		f[0] = f_down(box.lo.x), f[1] = f_down(box.lo.y), f[2] = f_down(box.lo.z);
+		f[3] = f_up(box.hi.x), f[4] = f_up(box.hi.y), f[5] = f_up(box.hi.z);
+		return 0;
+	}
 	b->box[b->n++] = box;
 	return 0;
 }
@@ -245,18 +320,10 @@ static struct group *define_group(struct accel *A, uint32_t d, struct scene_erro
 	return A->dgroup[d];
 }
 
-static void float_inverse(const mat34 *inv, struct ginst *gi, mat34 *rounded)
-{
-	for (int i = 0; i < 3; i++)
-		for (int j = 0; j < 4; j++) {
-			gi->inv[4 * i + j] = (float)inv->m[i][j];
-			rounded->m[i][j] = gi->inv[4 * i + j];
-		}
-}
-
 /*
  * Puts g's instance records in leaf order: first the bounded ones, record k
- * being the one of reference all[perm[k]], then the unbounded ones in
+ * being the one of reference all[perm[k]] (all NULL: reference j is
+ * instance j), then the unbounded ones in
  * g->unb's order (their references renumbered). In place, cycle by cycle,
  * with a 4-byte index per record (a copy of the records would hold the
  * group's biggest array twice at the build's peak). Every record has one
@@ -270,7 +337,7 @@ static int order_instances(struct group *g, const uint32_t *all, const uint32_t 
 	if (!src)
 		return -1;
 	for (uint32_t k = 0; k < n_bounded; k++)
-		src[k] = REF_IDX(all[perm[k]]);
+		src[k] = all ? REF_IDX(all[perm[k]]) : perm[k];
 	uint32_t next = n_bounded;
 	for (uint32_t k = 0; k < g->n_unb; k++)
 		if (REF_KIND(g->unb[k]) == REF_INST) {
@@ -309,14 +376,16 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	const struct scene *s = A->s;
 	struct group *g = calloc(1, sizeof *g);
 	struct geom_box *boxes = NULL;
+	float(*fboxes)[6] = NULL;
 	uint32_t *all = NULL, *perm = NULL;
-	struct refbuf rb = { NULL, NULL, 0, 0 };
+	struct refbuf rb = { NULL, NULL, NULL, 0, 0 };
 	if (!g)
 		goto oom;
 	/* pass 1: counts */
 	uint64_t n_sph = 0, n_mesh = 0, n_tri = 0, n_xp = 0, n_inst = 0, n_bake = 0;
 	for (uint32_t k = 0; k < n; k++) {
-		const struct scene_object *o = &s->objects[objs[k]];
+		struct scene_object tmp;
+		const struct scene_object *o = scene_object(s, objs[k], &tmp);
 		switch (o->kind) {
 		case PRIM_SPHERE:
 			if (o->has_xform)
@@ -363,7 +432,7 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 
 	/* pass 2: fill; bounded references go to all[]/boxes[], the rest to unb
 	 * (room for one each; only split triangles make more) */
-	if (refbuf_reserve(&rb, (uint32_t)n_all) < 0)
+	if (refbuf_reserve(&rb, (uint32_t)n_all, n_sph == 0 && n_tri == 0 && n_inst >= ACCEL_PACK_MIN) < 0)
 		goto oom;
 	uint32_t n_unb = 0;
 	uint32_t *unb = malloc((n_all ? n_all : 1) * sizeof *unb);
@@ -375,7 +444,8 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 		if (cancel_poll_every(k))
 			goto cancelled;
 		uint32_t oi = objs[k];
-		const struct scene_object *o = &s->objects[oi];
+		struct scene_object tmp;
+		const struct scene_object *o = scene_object(s, oi, &tmp);
 		struct geom_box bx;
 		uint32_t ref;
 		if (o->kind == PRIM_SPHERE && !o->has_xform) {
@@ -472,11 +542,9 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			if (sub->n_refs == 0 && sub->n_unb == 0)
 				continue; /* an empty define draws nothing */
 			struct ginst *gi = &g->inst[g->n_inst];
-			gi->obj = oi;
-			mat34 inv = m34_identity(), rinv, fwd;
-			if (o->has_xform && !m34_invert(&o->xform, &inv))
-				inv = m34_identity();
-			float_inverse(&inv, gi, &rinv);
+			gi->rec = scene_inst_rank(s, oi);
+			mat34 rinv, fwd;
+			inst_inverse(A, scene_inst_at(s, oi), &rinv);
 			if (!m34_invert(&rinv, &fwd)) {
 				scene_errorf(err, ERRLEVEL_FATAL, "error: instance transform is singular in single precision");
 				goto fail;
@@ -516,8 +584,10 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	uint32_t n_bounded = rb.n;
 	all = rb.ref;
 	boxes = rb.box;
+	fboxes = rb.fbox;
 	rb.ref = NULL;
 	rb.box = NULL;
+	rb.fbox = NULL;
 	g->n_unb = n_unb;
 	if (n_unb == 1 && REF_KIND(unb[0]) == REF_XPRIM) {
 		const struct geom_obj *go = g->xp[REF_IDX(unb[0])].g;
@@ -537,24 +607,36 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	for (uint32_t k = 0; k < n_bounded; k++) {
 		if (cancel_poll_every(k))
 			goto cancelled;
-		world = geom_box_union(world, boxes[k]);
+		world = geom_box_union(world, ref_box(boxes, fboxes, k));
 	}
 	g->center = n_bounded ? v3_scale(v3_add(world.lo, world.hi), 0.5) : v3(0, 0, 0);
 	double big = 0;
 	for (uint32_t k = 0; k < n_bounded; k++) {
 		if (cancel_poll_every(k))
 			goto cancelled;
-		boxes[k].lo = v3_sub(boxes[k].lo, g->center);
-		boxes[k].hi = v3_sub(boxes[k].hi, g->center);
-		big = fmax(big, fmax(fmax(fabs(boxes[k].lo.x), fabs(boxes[k].lo.y)), fabs(boxes[k].lo.z)));
-		big = fmax(big, fmax(fmax(fabs(boxes[k].hi.x), fabs(boxes[k].hi.y)), fabs(boxes[k].hi.z)));
+		struct geom_box b = ref_box(boxes, fboxes, k);
+		b.lo = v3_sub(b.lo, g->center);
+		b.hi = v3_sub(b.hi, g->center);
+		if (boxes)
+			boxes[k] = b;
+		big = fmax(big, fmax(fmax(fabs(b.lo.x), fabs(b.lo.y)), fabs(b.lo.z)));
+		big = fmax(big, fmax(fmax(fabs(b.hi.x), fabs(b.hi.y)), fabs(b.hi.z)));
 	}
 	vec3 pad = v3(big * BOX_PAD_REL, big * BOX_PAD_REL, big * BOX_PAD_REL);
 	for (uint32_t k = 0; k < n_bounded; k++) {
 		if (cancel_poll_every(k))
 			goto cancelled;
-		boxes[k].lo = v3_sub(boxes[k].lo, pad);
-		boxes[k].hi = v3_add(boxes[k].hi, pad);
+		if (boxes) {
+			boxes[k].lo = v3_sub(boxes[k].lo, pad);
+			boxes[k].hi = v3_add(boxes[k].hi, pad);
+			continue;
+		}
+		/* the same steps in double, then outward to float (FLOAT BOXES) */
+		float *f = fboxes[k];
+		vec3 lo = v3_sub(v3_sub(v3(f[0], f[1], f[2]), g->center), pad);
+		vec3 hi = v3_add(v3_sub(v3(f[3], f[4], f[5]), g->center), pad);
+		f[0] = f_down(lo.x), f[1] = f_down(lo.y), f[2] = f_down(lo.z);
+		f[3] = f_up(hi.x), f[4] = f_up(hi.y), f[5] = f_up(hi.z);
 	}
 	/* a group whose bounded references are ACCEL_PACK_MIN or more instances
 	 * and nothing else keeps its instance records in leaf order instead of a
@@ -562,13 +644,31 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	bool inst_only = n_bounded >= ACCEL_PACK_MIN;
 	for (uint32_t k = 0; k < n_bounded && inst_only; k++)
 		inst_only = REF_KIND(all[k]) == REF_INST;
+	if (inst_only) { /* all[] is often instance k at k: then it goes before the build's peak */
+		bool ident = true;
+		for (uint32_t k = 0; k < n_bounded && ident; k++)
+			ident = all[k] == REF_MAKE(REF_INST, k);
+		if (ident) {
+			free(all);
+			all = NULL;
+		}
+	}
+	/* before the build: bvh_build_f frees the float boxes */
+	g->bounds = geom_box_empty();
+	for (uint32_t k = 0; k < n_bounded; k++) {
+		if (cancel_poll_every(k))
+			goto cancelled;
+		g->bounds = geom_box_union(g->bounds, ref_box(boxes, fboxes, k));
+	}
 	perm = malloc((n_bounded ? n_bounded : 1) * sizeof *perm);
 	if (!inst_only)
 		g->refs = malloc((n_bounded ? n_bounded : 1) * sizeof *g->refs);
 	if (!perm || (!inst_only && !g->refs))
 		goto oom;
-	int brc = bvh_build_ex(&g->bvh, boxes, n_bounded, perm, inst_only ? ACCEL_INST_LEAF : ACCEL_MAX_LEAF,
-			       inst_only);
+	uint32_t max_leaf = inst_only ? ACCEL_INST_LEAF : ACCEL_MAX_LEAF;
+	int brc = boxes ? bvh_build_ex(&g->bvh, boxes, n_bounded, perm, max_leaf, inst_only)
+			: bvh_build_f(&g->bvh, fboxes, n_bounded, perm, max_leaf, inst_only);
+	fboxes = NULL; /* bvh_build_f freed them */
 	if (brc == BVH_CANCELLED)
 		goto cancelled;
 	if (brc < 0)
@@ -578,12 +678,6 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	for (uint32_t k = 0; k < g->bvh.n_nodes4; k++)
 		for (int c = 0; c < 4; c++)
 			g->big_leaf |= g->bvh.nodes[k].n[c] > ACCEL_LEAF_CHUNK;
-	g->bounds = geom_box_empty();
-	for (uint32_t k = 0; k < n_bounded; k++) {
-		if (cancel_poll_every(k))
-			goto cancelled;
-		g->bounds = geom_box_union(g->bounds, boxes[k]);
-	}
 	if (inst_only) { /* bounded instances in leaf order, then the unbounded ones */
 		int orc = order_instances(g, all, perm, n_bounded);
 		if (orc == ACCEL_CANCELLED)
@@ -609,6 +703,7 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	free(perm);
 	free(all);
 	free(boxes);
+	free(fboxes);
 	return g;
 cancelled:
 	scene_errorf(err, ERRLEVEL_FATAL, "cancelled");
@@ -618,9 +713,11 @@ oom:
 fail:
 	free(rb.ref);
 	free(rb.box);
+	free(rb.fbox);
 	free(perm);
 	free(all);
 	free(boxes);
+	free(fboxes);
 	group_free(g);
 	return NULL;
 }
@@ -648,7 +745,8 @@ static int check_depths(const struct scene *s, struct scene_error *err)
 			rc = scene_errorf(err, ERRLEVEL_FATAL, "cancelled");
 			goto out;
 		}
-		const struct scene_object *o = &s->objects[i];
+		struct scene_object tmp;
+		const struct scene_object *o = scene_object(s, i, &tmp);
 		unsigned c = 0, d = 0;
 		if (o->kind == PRIM_CSG) {
 			uint32_t a = o->u.csg.operand1, b = o->u.csg.operand2;
@@ -706,6 +804,17 @@ int accel_build(const struct scene *s, struct accel **out, struct scene_error *e
 		return scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
 	}
 	A->st.bytes = sizeof *A + (size_t)s->n_defines * sizeof(void *);
+	if (s->n_lins) { /* inst_inverse's 3x3 parts, one per distinct one */
+		A->lin_inv = malloc((size_t)s->n_lins * sizeof *A->lin_inv);
+		if (!A->lin_inv) {
+			accel_free(A);
+			return scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
+		}
+		for (uint32_t k = 0; k < s->n_lins; k++)
+			if (!m34_invert(&s->lins[k], &A->lin_inv[k]))
+				A->lin_inv[k].m[0][3] = NAN;
+		A->st.bytes += (size_t)s->n_lins * sizeof *A->lin_inv;
+	}
 	A->st.instance_bytes = sizeof(struct ginst);
 	A->root = build_group(A, s->roots, s->n_roots, err);
 	if (!A->root || cancel_seen()) {

@@ -17,8 +17,8 @@ enum { REF_SPHERE = 0, REF_TRI = 1, REF_XPRIM = 2, REF_INST = 3 };
 #define REF_IDX(r) ((r) & 0x3fffffffu)
 /* references per group: 30 bits of index */
 #define ACCEL_MAX_REFS (1u << 30)
-/* an instance's tie key is REF_MAKE(REF_INST, its object index) (accel.c) */
-_Static_assert(LIM_OBJECTS <= ACCEL_MAX_REFS, "object indices fit a reference's index bits");
+/* an instance's tie key is REF_MAKE(REF_INST, its scene record) (accel.c) */
+_Static_assert(LIM_OBJECTS <= ACCEL_MAX_REFS, "object and record indices fit a reference's index bits");
 /* primitives per BVH leaf */
 #define ACCEL_MAX_LEAF 4
 /* instances per leaf in a group of at least ACCEL_PACK_MIN instances and
@@ -68,9 +68,15 @@ struct xprim {
 	uint32_t obj;
 };
 
+/* An instance: the index of its record in scene.insts, 4 bytes (issue
+ * 13: a million instances in 100 bytes each, the whole process). Its
+ * define, material and transform are the scene's; its geometry is exactly
+ * the inverse transform rounded to float (inst_inverse), which the build
+ * and every ray compute alike. Records are in the order of their object
+ * indices, so tie keys made from rec order instances as object indices
+ * did (CANONICAL TIES in accel.c). */
 struct ginst {
-	float inv[12]; /* parent -> define space, row-major 3x4 */
-	uint32_t obj;  /* the instance object (its define gives the group) */
+	uint32_t rec;
 };
 
 struct group {
@@ -105,8 +111,50 @@ struct accel {
 	struct geom_obj **gobj;   /* per object, built on demand; NULL until needed (owned) */
 	struct group **dgroup;    /* per define, built on first use (owned) */
 	struct group *root;
+	/* the inverses of the scene's instance 3x3 parts (scene.lins), as
+	 * m34_invert makes them; m[0][3] NaN: singular (owned) */
+	mat34 *lin_inv;
 	struct accel_stats st;
 };
+
+/*
+ * The inverse transform (parent -> define space) of instance record si,
+ * rounded to float and back: what the instance's geometry is, for rays,
+ * normals and bounds alike; the build and every visit compute it alike.
+ * The values are m34_invert's: its 3x3 part depends on the transform's
+ * 3x3 part alone (A->lin_inv, or the identity's, exact), its translation
+ * is the same expression. The identity without a transform, and for a
+ * singular one (which the scene builder refuses).
+ */
+static inline void inst_inverse(const struct accel *A, const struct scene_inst *si, mat34 *m)
+{
+	if (si->lin == SCENE_LIN_NONE) {
+		*m = m34_identity();
+		return;
+	}
+	vec3 t = si->t;
+	if (si->lin == SCENE_LIN_IDENTITY) {
+		/* m34_invert of the identity's 3x3 part is exactly it (+0 off the
+		 * diagonal); the translation the same products (0 * y keeps y's
+		 * sign), and nothing to round in the 3x3 part */
+		*m = m34_identity();
+		m->m[0][3] = (float)-(1.0 * t.x + 0.0 * t.y + 0.0 * t.z);
+		m->m[1][3] = (float)-(0.0 * t.x + 1.0 * t.y + 0.0 * t.z);
+		m->m[2][3] = (float)-(0.0 * t.x + 0.0 * t.y + 1.0 * t.z);
+		return;
+	}
+	*m = A->lin_inv[si->lin];
+	if (isnan(m->m[0][3])) {
+		*m = m34_identity();
+		return;
+	}
+	const double (*r)[4] = m->m;
+	for (int i = 0; i < 3; i++)
+		m->m[i][3] = -(r[i][0] * t.x + r[i][1] * t.y + r[i][2] * t.z);
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 4; j++)
+			m->m[i][j] = (float)m->m[i][j];
+}
 
 
 static inline const uint32_t *tri_ix(const struct gmesh *m, uint32_t tri) { return m->ix + 3 * (size_t)tri; }

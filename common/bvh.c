@@ -51,7 +51,8 @@ struct bvh_task {
 };
 
 struct bvh_ctx {
-	const struct geom_box *boxes;
+	const struct geom_box *boxes; /* the items' boxes; or NULL and fboxes */
+	const float (*fboxes)[6];
 	uint32_t *perm;
 	struct bvh_node *nodes;
 	atomic_uint n_nodes; /* nodes handed out (any thread) */
@@ -163,6 +164,17 @@ static inline int bin_of(double c, double lo, double scale)
 	return k < 0 ? 0 : k >= BVH_BINS ? BVH_BINS - 1 : k;
 }
 
+/* Item it's box: a pointer into the doubles, or its float box in *tmp. */
+static inline const struct geom_box *item_box(const struct bvh_ctx *B, uint32_t it, struct geom_box *tmp)
+{
+	if (B->boxes)
+		return &B->boxes[it];
+	const float *f = B->fboxes[it];
+	tmp->lo = v3(f[0], f[1], f[2]);
+	tmp->hi = v3(f[3], f[4], f[5]);
+	return tmp;
+}
+
 /* The span of perm[begin, end), item by item. */
 static void span_of(const struct bvh_ctx *B, uint32_t begin, uint32_t end, struct bvh_span *sp)
 {
@@ -172,19 +184,22 @@ static void span_of(const struct bvh_ctx *B, uint32_t begin, uint32_t end, struc
 	for (uint32_t i = begin; i < end; i++) {
 		if (cancel_poll_every(i))
 			return;
-		uint32_t it = B->perm[i];
-		box_grow(&sp->bb, &B->boxes[it]);
-		box_grow_pt(&sp->cb, cent_of(&B->boxes[it]));
-		sp->amax = mx(sp->amax, box_area(B->boxes[it]));
+		struct geom_box tmp;
+		const struct geom_box *ib = item_box(B, B->perm[i], &tmp);
+		box_grow(&sp->bb, ib);
+		box_grow_pt(&sp->cb, cent_of(ib));
+		sp->amax = mx(sp->amax, box_area(*ib));
 	}
 }
 
 /* Adds item it to span *sp. */
 static inline void span_add(const struct bvh_ctx *B, struct bvh_span *sp, uint32_t it)
 {
-	box_grow(&sp->bb, &B->boxes[it]);
-	box_grow_pt(&sp->cb, cent_of(&B->boxes[it]));
-	sp->amax = mx(sp->amax, box_area(B->boxes[it]));
+	struct geom_box tmp;
+	const struct geom_box *ib = item_box(B, it, &tmp);
+	box_grow(&sp->bb, ib);
+	box_grow_pt(&sp->cb, cent_of(ib));
+	sp->amax = mx(sp->amax, box_area(*ib));
 }
 
 /*
@@ -204,7 +219,8 @@ static uint32_t partition(struct bvh_ctx *B, uint32_t begin, uint32_t end, int a
 		if (cancel_poll_every(i))
 			return i;
 		uint32_t it = B->perm[i];
-		const struct geom_box *ib = &B->boxes[it];
+		struct geom_box tmp;
+		const struct geom_box *ib = item_box(B, it, &tmp);
 		bool first = big > 0 ? box_area(*ib) > big : bin_of(v3_comp(cent_of(ib), axis), lo, scale) < split_bin;
 		if (first) {
 			span_add(B, left, it);
@@ -322,7 +338,8 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 		if (cancel_poll_every(i))
 			return;
 		uint32_t it = B->perm[i];
-		const struct geom_box *ib = &B->boxes[it];
+		struct geom_box tmp;
+		const struct geom_box *ib = item_box(B, it, &tmp);
 		vec3 c = cent_of(ib);
 		for (int l = 0; l < n_live; l++) {
 			int axis = live[l];
@@ -355,7 +372,8 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 			if (cancel_poll_every(i))
 				return;
 			uint32_t it = B->perm[i];
-			const struct geom_box *ib = &B->boxes[it];
+			struct geom_box tmp;
+			const struct geom_box *ib = item_box(B, it, &tmp);
 			double a = box_area(*ib);
 			for (int q = 0; q < 3; q++) {
 				if (a > thr[q])
@@ -554,8 +572,8 @@ int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t 
 	return bvh_build_ex(b, boxes, n, perm, max_leaf, false);
 }
 
-int bvh_build_ex(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf,
-		 bool pack)
+static int build(struct bvh *b, const struct geom_box *boxes, float (*fboxes)[6], uint32_t n, uint32_t *perm,
+		 uint32_t max_leaf, bool pack)
 {
 	memset(b, 0, sizeof *b);
 	if (n == 0)
@@ -563,17 +581,21 @@ int bvh_build_ex(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32
 	struct bvh_ctx B;
 	memset(&B, 0, sizeof B);
 	B.boxes = boxes;
+	B.fboxes = fboxes;
 	B.perm = perm;
 	atomic_init(&B.n_nodes, 1);
 	atomic_init(&B.gave_up, 0);
 	B.max_leaf = max_leaf ? max_leaf : 1;
 	B.pack = pack;
 	B.nodes = malloc((size_t)2 * n * sizeof *B.nodes);
-	if (!B.nodes)
+	if (!B.nodes) {
+		free(fboxes);
 		return -1;
+	}
 	for (uint32_t i = 0; i < n; i++)
 		perm[i] = i;
 	build_all(&B, n);
+	free(fboxes); /* bvh_build_f's: the collapse below reads the binary nodes only */
 	if (cancel_seen()) {
 		free(B.nodes);
 		return BVH_CANCELLED;
@@ -604,6 +626,22 @@ int bvh_build_ex(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32
 	}
 	free(B.nodes);
 	return 0;
+}
+
+int bvh_build_ex(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf,
+		 bool pack)
+{
+	return build(b, boxes, NULL, n, perm, max_leaf, pack);
+}
+
+int bvh_build_f(struct bvh *b, float (*boxes)[6], uint32_t n, uint32_t *perm, uint32_t max_leaf, bool pack)
+{
+	if (n == 0) {
+		free(boxes);
+		memset(b, 0, sizeof *b);
+		return 0;
+	}
+	return build(b, NULL, boxes, n, perm, max_leaf, pack);
 }
 
 void bvh_free(struct bvh *b)

@@ -135,7 +135,7 @@ static int cmp_x(const void *pa, const void *pb)
 /* Crossings of a raw mesh (object space ray o + t d), sorted by t. */
 static void mesh_crossings(const struct scene *s, uint32_t obj, vec3 o, vec3 d, struct csg_buf *b)
 {
-	const struct scene_mesh *m = &s->meshes[s->objects[obj].u.raw.mesh];
+	const struct scene_mesh *m = &s->meshes[scene_full_at(s, obj)->u.raw.mesh];
 	struct geom_wray w;
 	geom_wray_init(&w, o, d);
 	size_t start = b->n;
@@ -182,7 +182,8 @@ static bool eval(const struct csg_env *E, uint32_t obj, vec3 o, vec3 d, struct c
 	if (cancel_poll())
 		return false;
 	const struct geom_obj *g = E->gobj[obj];
-	const struct scene_object *so = &E->s->objects[obj];
+	struct scene_object tmp;
+	const struct scene_object *so = g->so ? g->so : scene_object(E->s, obj, &tmp);
 	vec3 lo = o, ld = d;
 	if (g->has_xform) {
 		lo = m34_point(&g->inv, o);
@@ -289,7 +290,8 @@ struct geom_box csg_bounds(const struct scene *s, struct geom_obj *const *gobj, 
 	if (cancel_poll())
 		return geom_box_empty();
 	const struct geom_obj *g = gobj[obj];
-	const struct scene_object *so = &s->objects[obj];
+	struct scene_object tmp;
+	const struct scene_object *so = scene_object(s, obj, &tmp);
 	struct geom_box b;
 	switch (so->kind) {
 	case PRIM_CSG: {

@@ -197,10 +197,12 @@ static void plane_axes(const struct prim_plane *p, vec3 n, vec3 *X, vec3 *Y)
 
 int geom_obj_init(const struct scene *s, uint32_t obj, struct geom_obj *g)
 {
-	const struct scene_object *o = &s->objects[obj];
+	struct scene_object tmp;
+	const struct scene_object *o = scene_object(s, obj, &tmp);
 	memset(g, 0, sizeof *g);
 	g->kind = o->kind;
 	g->obj = obj;
+	g->so = o == &tmp ? NULL : o;
 	g->has_xform = o->has_xform;
 	g->fwd = o->has_xform ? o->xform : m34_identity();
 	if (!o->has_xform || !m34_invert(&g->fwd, &g->inv)) {
@@ -291,7 +293,8 @@ static vec3 disk_extent(vec3 n, double r)
 struct geom_box geom_obj_local_bounds(const struct scene *s, const struct geom_obj *g)
 {
 	struct geom_box b = geom_box_empty();
-	const struct scene_object *o = &s->objects[g->obj];
+	struct scene_object tmp;
+	const struct scene_object *o = scene_object(s, g->obj, &tmp);
 	switch (g->kind) {
 	case PRIM_SPHERE: {
 		vec3 r = v3(g->u.sph.r, g->u.sph.r, g->u.sph.r);

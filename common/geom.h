@@ -43,6 +43,8 @@ struct geom_poly {
 struct geom_obj {
 	enum prim_kind kind;
 	uint32_t obj;      /* scene object index */
+	const struct scene_object *so; /* the scene's object; NULL for an instance
+					  (read it with scene_object) */
 	bool has_xform;
 	mat34 inv;         /* parent -> object (identity when !has_xform) */
 	mat34 fwd;         /* object -> parent */

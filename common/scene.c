@@ -207,8 +207,8 @@ void scene_free(struct scene *s)
 	}
 	for (uint32_t i = 0; i < s->n_meshes; i++)
 		mesh_free_owned(&s->meshes[i]);
-	for (uint32_t i = 0; i < s->n_objects; i++)
-		object_free_owned(&s->objects[i]);
+	for (uint32_t i = 0; i < s->n_objs; i++)
+		object_free_owned(&s->objs[i]);
 	for (uint32_t i = 0; i < s->n_defines; i++) {
 		free(s->defines[i].name);
 		free(s->defines[i].objects);
@@ -218,7 +218,11 @@ void scene_free(struct scene *s)
 	free(s->lights);
 	free(s->materials);
 	free(s->meshes);
-	free(s->objects);
+	free(s->inst_bits);
+	free(s->inst_rank);
+	free(s->objs);
+	free(s->insts);
+	free(s->lins);
 	free(s->defines);
 	free(s->roots);
 	free(s->files);
@@ -481,6 +485,125 @@ static int check_polygon(const struct prim_polygon *p)
 	return 1;
 }
 
+/* Room in inst_bits and inst_rank for object n_objects (its word is
+ * started: no bit set, the rank of the instances so far). 0 or -1. */
+static int grow_bits(struct scene *s)
+{
+	uint32_t w = s->n_objects >> 6;
+	if (w >= s->cap_words) {
+		uint32_t nc = s->cap_words ? s->cap_words * 2 : 4;
+		uint64_t *nb = realloc(s->inst_bits, (size_t)nc * sizeof *nb);
+		if (!nb)
+			return -1;
+		s->inst_bits = nb;
+		uint32_t *nr = realloc(s->inst_rank, (size_t)nc * sizeof *nr);
+		if (!nr)
+			return -1;
+		s->inst_rank = nr;
+		s->cap_words = nc;
+	}
+	if ((s->n_objects & 63) == 0) {
+		s->inst_bits[w] = 0;
+		s->inst_rank[w] = s->n_insts;
+	}
+	return 0;
+}
+
+/* Appends o (not an instance) to objs[] as object n_objects. 0 or -1. */
+static int add_full(struct scene *s, const struct scene_object *o)
+{
+	if (grow((void **)&s->objs, s->n_objs, &s->cap_objs, sizeof *s->objs, LIM_OBJECTS) < 0)
+		return -1;
+	s->objs[s->n_objs++] = *o;
+	return 0;
+}
+
+/* The files[] index of interned name f (SCENE_NONE for NULL or a name the
+ * scene did not intern: decoders' placeholders). */
+static uint32_t file_index(struct scene *s, const char *f)
+{
+	if (!f)
+		return SCENE_NONE;
+	if (s->last_file < s->n_files && s->files[s->last_file] == f)
+		return s->last_file;
+	for (uint32_t k = 0; k < s->n_files; k++)
+		if (s->files[k] == f)
+			return s->last_file = k;
+	return SCENE_NONE;
+}
+
+/* Appends instance o as a compact record (INSTANCES in scene.h), object
+ * n_objects. Returns 0 or -1. */
+static int add_inst(struct scene *s, const struct scene_object *o)
+{
+	struct scene_inst in;
+	memset(&in, 0, sizeof in);
+	in.define = o->u.instance.define;
+	in.material = o->material;
+	in.line = o->loc.line;
+	in.col = o->loc.col;
+	in.file = file_index(s, o->loc.file);
+	if (o->loc.file && in.file == SCENE_NONE) {
+		/* not interned here: intern it, so the record can name it */
+		const char *f = scene_intern_file(s, o->loc.file);
+		if (!f)
+			return -1;
+		in.file = file_index(s, f);
+	}
+	in.lin = SCENE_LIN_NONE;
+	if (o->has_xform) {
+		mat34 lin = o->xform;
+		in.t = v3(lin.m[0][3], lin.m[1][3], lin.m[2][3]);
+		lin.m[0][3] = lin.m[1][3] = lin.m[2][3] = 0;
+		mat34 id = m34_identity();
+		if (memcmp(&lin, &id, sizeof lin) == 0) { /* bit for bit: -0 is not 0 here */
+			in.lin = SCENE_LIN_IDENTITY;
+		} else if (s->n_lins && memcmp(&lin, &s->lins[s->n_lins - 1], sizeof lin) == 0) {
+			in.lin = s->n_lins - 1; /* the same rotation as the instance before */
+		} else {
+			if (grow((void **)&s->lins, s->n_lins, &s->cap_lins, sizeof *s->lins, LIM_OBJECTS) < 0)
+				return -1;
+			in.lin = s->n_lins;
+			s->lins[s->n_lins++] = lin;
+		}
+	}
+	if (grow((void **)&s->insts, s->n_insts, &s->cap_insts, sizeof *s->insts, LIM_OBJECTS) < 0)
+		return -1;
+	s->inst_bits[s->n_objects >> 6] |= UINT64_C(1) << (s->n_objects & 63);
+	s->insts[s->n_insts++] = in;
+	return 0;
+}
+
+void scene_inst_xform(const struct scene *s, const struct scene_inst *in, mat34 *m)
+{
+	if (in->lin == SCENE_LIN_NONE) {
+		*m = m34_identity();
+		return;
+	}
+	*m = in->lin == SCENE_LIN_IDENTITY ? m34_identity() : s->lins[in->lin];
+	m->m[0][3] = in->t.x;
+	m->m[1][3] = in->t.y;
+	m->m[2][3] = in->t.z;
+}
+
+void scene_inst_expand(const struct scene *s, const struct scene_inst *in, struct scene_object *o)
+{
+	scene_object_defaults(o, PRIM_INSTANCE);
+	o->u.instance.define = in->define;
+	o->material = in->material;
+	o->has_xform = in->lin != SCENE_LIN_NONE;
+	scene_inst_xform(s, in, &o->xform);
+	o->loc.file = in->file == SCENE_NONE ? NULL : s->files[in->file];
+	o->loc.line = in->line;
+	o->loc.col = in->col;
+}
+
+struct scene_object scene_object_at(const struct scene *s, uint32_t i)
+{
+	struct scene_object tmp;
+	return *scene_object(s, i, &tmp);
+}
+
 int scene_add_object(struct scene *s, struct scene_object *o, uint32_t *id, struct scene_error *err)
 {
 	uint32_t self = s->n_objects;
@@ -536,11 +659,12 @@ int scene_add_object(struct scene *s, struct scene_object *o, uint32_t *id, stru
 		scene_errorf(err, 1, LOCFMT "%s object has %s", LOCARGS(&o->loc), scene_prim_name(o->kind), why);
 		goto fail;
 	}
-	if (grow((void **)&s->objects, s->n_objects, &s->cap_objects, sizeof *s->objects, LIM_OBJECTS) < 0) {
+	if (s->n_objects >= LIM_OBJECTS || grow_bits(s) < 0 ||
+	    (o->kind == PRIM_INSTANCE ? add_inst(s, o) : add_full(s, o)) < 0) {
 		scene_errorf(err, 1, LOCFMT "too many objects or out of memory", LOCARGS(&o->loc));
 		goto fail;
 	}
-	s->objects[s->n_objects++] = *o;
+	s->n_objects++;
 	if (o->kind == PRIM_POLYGON)
 		o->u.polygon.points = NULL, o->u.polygon.contour_start = NULL;
 	if (id)
@@ -633,16 +757,8 @@ static struct drawn drawn_add(struct drawn a, struct drawn b)
  * every operand an object of its own, so only defines are shared. */
 static struct drawn object_drawn(const struct scene *s, uint32_t i, struct drawn_memo *memo)
 {
-	const struct scene_object *o = &s->objects[i];
-	switch (o->kind) {
-	case PRIM_TRIANGLE:
-		return (struct drawn){ 1, 1 };
-	case PRIM_RAW:
-		return (struct drawn){ s->meshes[o->u.raw.mesh].n_triangles, 1 };
-	case PRIM_CSG:
-		return drawn_add(object_drawn(s, o->u.csg.operand1, memo), object_drawn(s, o->u.csg.operand2, memo));
-	case PRIM_INSTANCE: {
-		uint32_t d = o->u.instance.define;
+	if (scene_is_inst(s, i)) {
+		uint32_t d = scene_inst_at(s, i)->define;
 		if (!memo[d].known) {
 			struct drawn n = { 0, 0 };
 			for (uint32_t k = 0; k < s->defines[d].n_objects; k++)
@@ -652,6 +768,14 @@ static struct drawn object_drawn(const struct scene *s, uint32_t i, struct drawn
 		}
 		return memo[d].n;
 	}
+	const struct scene_object *o = scene_full_at(s, i);
+	switch (o->kind) {
+	case PRIM_TRIANGLE:
+		return (struct drawn){ 1, 1 };
+	case PRIM_RAW:
+		return (struct drawn){ s->meshes[o->u.raw.mesh].n_triangles, 1 };
+	case PRIM_CSG:
+		return drawn_add(object_drawn(s, o->u.csg.operand1, memo), object_drawn(s, o->u.csg.operand2, memo));
 	default: /* sphere, plane, cylinder, box, disk, polygon */
 		return (struct drawn){ 0, 1 };
 	}
@@ -660,8 +784,9 @@ static struct drawn object_drawn(const struct scene *s, uint32_t i, struct drawn
 void scene_stats(const struct scene *s, struct scene_stats *st)
 {
 	memset(st, 0, sizeof *st);
-	for (uint32_t i = 0; i < s->n_objects; i++)
-		st->by_kind[s->objects[i].kind]++;
+	for (uint32_t i = 0; i < s->n_objs; i++)
+		st->by_kind[s->objs[i].kind]++;
+	st->by_kind[PRIM_INSTANCE] += s->n_insts;
 	for (uint32_t i = 0; i < s->n_meshes; i++)
 		st->triangles += s->meshes[i].n_triangles;
 	st->triangles += st->by_kind[PRIM_TRIANGLE];

@@ -11,7 +11,9 @@
  * Everything is stored in flat arrays and referenced by uint32 index:
  *   materials[]  every material: named ones and anonymous inline ones
  *   meshes[]     RAW meshes (each loaded once)
- *   objects[]    every object node: primitives, CSG nodes, instances
+ *   objects      every object node: primitives, CSG nodes, instances, by
+ *                object index (0 .. n_objects-1); read them through
+ *                scene_object() (INSTANCES, below)
  *   defines[]    named object groups (define object NAME ...)
  *   roots[]      top-level objects, in file order
  * An object may only reference objects, defines and materials with a smaller
@@ -198,6 +200,35 @@ struct scene_object {
 	struct src_loc loc;
 };
 
+/*
+ * INSTANCES. A scene may hold millions of instances (issue 13: a million of
+ * them in at most 100 bytes each, the whole process), so an instance is not
+ * a 280-byte struct scene_object but a 48-byte struct scene_inst: its
+ * translation, its define and material, its source location, and the index
+ * of its transform's 3x3 part in a table of such parts (where neighbours
+ * written with the same rotation share one entry). Bit i of inst_bits says
+ * whether object i is an instance; its rank among the instances (the
+ * count in inst_rank[i / 64] of those below object 64 (i / 64), plus the
+ * bits below i in its word) indexes insts[], and i minus that rank indexes
+ * objs[] (every other kind, as written): 1.5 bits per object, no table of
+ * indices. scene_object() gives any object as a
+ * struct scene_object (an instance expanded into the caller's buffer); the
+ * expansion gives back the very bits that were added (the 3x3 part is
+ * compared bit for bit, -0 included), so nothing reading a scene can tell.
+ * An instance added without has_xform reads back with the identity.
+ */
+#define SCENE_LIN_NONE UINT32_MAX     /* scene_inst.lin: no transform (has_xform false) */
+#define SCENE_LIN_IDENTITY (UINT32_MAX - 1) /* a translation only: the 3x3 part is the identity */
+
+struct scene_inst {
+	vec3 t;            /* the transform's translation column (0 without one) */
+	uint32_t lin;      /* SCENE_LIN_NONE, SCENE_LIN_IDENTITY or an index into lins */
+	uint32_t define;   /* index into scene.defines */
+	uint32_t material; /* SCENE_NONE: inherit */
+	uint32_t file;     /* index into scene.files; SCENE_NONE: no file */
+	int32_t line, col;
+};
+
 /* A RAW mesh after welding/rotation; shared by every object that uses it. */
 struct scene_mesh {
 	char *file;            /* path as written in the scene (owned) */
@@ -306,8 +337,17 @@ struct scene {
 	uint32_t n_materials, cap_materials;
 	struct scene_mesh *meshes;
 	uint32_t n_meshes, cap_meshes;
-	struct scene_object *objects;
-	uint32_t n_objects, cap_objects;
+	/* objects: n_objects indices, instances told apart by inst_bits (INSTANCES) */
+	uint64_t *inst_bits;         /* bit i: object i is an instance */
+	uint32_t *inst_rank;         /* per word: the instances below it */
+	uint32_t n_objects, cap_words;
+	struct scene_object *objs;   /* every object but instances */
+	uint32_t n_objs, cap_objs;
+	struct scene_inst *insts;    /* instances */
+	uint32_t n_insts, cap_insts;
+	mat34 *lins;                 /* instances' 3x3 parts (translation column 0) */
+	uint32_t n_lins, cap_lins;
+	uint32_t last_file;          /* files[] index of the last instance's file (a cache) */
 	struct scene_define *defines;
 	uint32_t n_defines, cap_defines;
 	uint32_t *roots;
@@ -317,6 +357,57 @@ struct scene {
 	char **files;
 	uint32_t n_files, cap_files;
 };
+
+/* Whether object i is an instance (stored as a struct scene_inst). */
+static inline bool scene_is_inst(const struct scene *s, uint32_t i) { return s->inst_bits[i >> 6] >> (i & 63) & 1; }
+/* The instances among objects 0 .. i-1: the word's rank plus the bits
+ * below i, counted inline (no popcount instruction is assumed: generic
+ * x86-64 builds call a library function for __builtin_popcountll). */
+static inline uint32_t scene_inst_rank(const struct scene *s, uint32_t i)
+{
+	uint64_t x = s->inst_bits[i >> 6] & ((UINT64_C(1) << (i & 63)) - 1);
+	uint32_t r = s->inst_rank[i >> 6];
+	if (!x)
+		return r;
+	x = x - ((x >> 1) & UINT64_C(0x5555555555555555));
+	x = (x & UINT64_C(0x3333333333333333)) + ((x >> 2) & UINT64_C(0x3333333333333333));
+	x = (x + (x >> 4)) & UINT64_C(0x0f0f0f0f0f0f0f0f);
+	return r + (uint32_t)((x * UINT64_C(0x0101010101010101)) >> 56);
+}
+/* The compact record of instance object i (scene_is_inst(s, i)). */
+static inline const struct scene_inst *scene_inst_at(const struct scene *s, uint32_t i)
+{
+	return &s->insts[scene_inst_rank(s, i)];
+}
+/* Object i that is not an instance (!scene_is_inst(s, i)). */
+static inline const struct scene_object *scene_full_at(const struct scene *s, uint32_t i)
+{
+	return &s->objs[i - scene_inst_rank(s, i)];
+}
+/* The kind of object i. */
+static inline enum prim_kind scene_kind(const struct scene *s, uint32_t i)
+{
+	return scene_is_inst(s, i) ? PRIM_INSTANCE : scene_full_at(s, i)->kind;
+}
+/* Expands instance record in into *o (a struct scene_object of kind
+ * PRIM_INSTANCE, exactly as it was added). */
+void scene_inst_expand(const struct scene *s, const struct scene_inst *in, struct scene_object *o);
+/* The transform of instance record in (the identity without one). */
+void scene_inst_xform(const struct scene *s, const struct scene_inst *in, mat34 *m);
+/*
+ * Object i (< n_objects): a pointer into the scene for every kind but
+ * instances, which are expanded into *tmp (then the pointer is tmp). Valid
+ * until the scene changes (and while *tmp lives).
+ */
+static inline const struct scene_object *scene_object(const struct scene *s, uint32_t i, struct scene_object *tmp)
+{
+	if (!scene_is_inst(s, i))
+		return scene_full_at(s, i);
+	scene_inst_expand(s, scene_inst_at(s, i), tmp);
+	return tmp;
+}
+/* Object i by value (tests and tools; polygon arrays stay the scene's). */
+struct scene_object scene_object_at(const struct scene *s, uint32_t i);
 
 /* Defaults, exactly as docs/language.md states them. */
 void scene_camera_defaults(struct scene_camera *c);

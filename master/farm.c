@@ -541,7 +541,6 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 		fprintf(stderr, "portray-master: the encoded scene (%zu bytes) is over the wire limit\n", scene_len);
 		goto out;
 	}
-	_Static_assert(sizeof f.hash == JOURNAL_HASH_BYTES, "one scene hash for the wire and the journal");
 	memcpy(f.hash, scene_hash, sizeof f.hash);
 	if (o->region) /* render.c checked it is inside the image */
 		tiling_init_region(&f.tg, w, h, o->tile, o->rx0, o->ry0, o->rx1, o->ry1);

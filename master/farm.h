@@ -15,7 +15,8 @@ struct journal;
 
 /*
  * Renders the encoded scene (scene_len bytes, proto_scene_encode, whose
- * proto_scene_hash is scene_hash: hashed once per render) at w x h
+ * proto_scene_hash is scene_hash: hashed once per render; scene is NULL for
+ * a local render, which keeps no encoding) at w x h
  * into image (w*h*render_pixel_bytes(px) bytes, pixels of type px as
  * render.h states them, rows top to bottom; with o->region only the
  * region's pixels are traced and written, the rest left as they were) on

@@ -270,24 +270,45 @@ int master_render(const struct master_opts *o)
 		rc = ERRLEVEL_FATAL;
 		goto done;
 	}
+	/* memory (issue 13): the parsed scene, its encoding and the decoded
+	 * scene are never all held at once, nor any two of them with the
+	 * acceleration's build; a local render keeps no encoding */
+	scene_free(s); /* the decoded scene is the one in use from here on */
+	s = NULL;
+	bool farm = o->workers || o->workers_file || o->accept;
 	rc = proto_scene_decode(enc, enc_len, &ds, &err);
 	if (rc) {
 		fprintf(stderr, "portray-master: internal error: the scene does not survive its encoding: %s\n", err.msg);
 		rc = ERRLEVEL_FATAL;
 		goto done;
 	}
+	/* the content hash: the workers' cache key and the journal's scene check
+	 * (taken before a local render drops the encoding) */
+	uint8_t scene_hash[PROTO_HASH_BYTES];
+	proto_scene_hash(enc, enc_len, scene_hash);
+	if (!farm && enc_len <= LIM_SCENE_BYTES) { /* farm_render still refuses one over the limit */
+		free(enc);
+		enc = NULL;
+	}
 	rc = renderer_new(ds, &r, &err);
 	if (rc) {
-		/* the decoded scene names no files: say it with the parsed one's locations */
+		/* the decoded scene names no files: say it with the parsed one's
+		 * locations (parsed again: errors here are rare, memory is not) */
 		struct renderer *r2 = NULL;
-		if (renderer_new(s, &r2, &err) == 0)
-			snprintf(err.msg, sizeof err.msg, "portray-master: cannot build the scene's acceleration");
+		struct scene_error perr;
+		renderer_free(r);
+		r = NULL;
+		scene_free(ds);
+		ds = NULL;
+		if (parse_files(o->camera, o->scene, &s, &perr) == 0) {
+			master_preview_apply(o, s);
+			if (renderer_new(s, &r2, &err) == 0)
+				snprintf(err.msg, sizeof err.msg, "portray-master: cannot build the scene's acceleration");
+		}
 		renderer_free(r2);
 		fprintf(stderr, "%s\n", err.msg);
 		goto done;
 	}
-	scene_free(s); /* the decoded scene is the one in use from here on */
-	s = NULL;
 	if (o->width && renderer_set_size(r, o->width, o->height) < 0) {
 		fprintf(stderr, "portray-master: --size %ux%u is too large (at most %llu pixels)\n",
 			o->width, o->height, (unsigned long long)LIM_IMAGE_PIXELS);
@@ -323,7 +344,8 @@ int master_render(const struct master_opts *o)
 		jp.region[2] = o->rx1;
 		jp.region[3] = o->ry1;
 	}
-	proto_scene_hash(enc, enc_len, jp.scene_hash);
+	_Static_assert(sizeof jp.scene_hash == sizeof scene_hash, "one scene hash for the wire and the journal");
+	memcpy(jp.scene_hash, scene_hash, sizeof scene_hash);
 	rc = journal_for_render(o, out, &jp, &jn);
 	if (rc)
 		goto done;
@@ -335,9 +357,8 @@ int master_render(const struct master_opts *o)
 	uint64_t total = tg.n;
 	uint32_t finished = 0;
 	int threads = o->threads > 0 ? o->threads : render_ncpus();
-	bool farm = o->workers || o->workers_file || o->accept;
 	/* one loop for every render: without workers it drives the local threads alone */
-	rc = farm_render(o, enc, enc_len, jp.scene_hash, t_build - t_parse, r, w, h, image, px, &cancel, &finished, jn);
+	rc = farm_render(o, enc, enc_len, scene_hash, t_build - t_parse, r, w, h, image, px, &cancel, &finished, jn);
 	if (rc && rc != ERRLEVEL_LEVEL2 && !atomic_load(&cancel))
 		goto done; /* farm_render said why */
 	rc = 0;

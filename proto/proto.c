@@ -23,7 +23,7 @@
 
 /* the versions as plain numbers for the build id (the header constants carry a u suffix) */
 #define PROTO_BUILD_PROTO 3
-#define PROTO_BUILD_SCENE 1
+#define PROTO_BUILD_SCENE 2
 _Static_assert(PROTO_BUILD_PROTO == PROTO_VERSION && PROTO_BUILD_SCENE == PROTO_SCENE_VERSION, "build id numbers");
 #define STR2(x) #x
 #define STR(x) STR2(x)

@@ -135,14 +135,35 @@ static void put_light(struct proto_wbuf *b, const struct scene_light *l)
 	put_loc(b, &l->loc);
 }
 
+/* Transform forms (version 2): a translation alone travels as 3 doubles,
+ * not 12 (a million instances of a mesh are 45 bytes each, not 117). */
+enum { XF_FORM_NONE = 0, XF_FORM_TRANSLATE = 1, XF_FORM_FULL = 2 };
+
+/* Whether m's 3x3 part is the identity's, bit for bit (-0 is not 0). */
+static bool lin_is_identity(const mat34 *m)
+{
+	mat34 id = m34_identity();
+	for (int i = 0; i < 3; i++)
+		if (memcmp(m->m[i], id.m[i], 3 * sizeof(double)) != 0)
+			return false;
+	return true;
+}
+
 static void put_object(struct proto_wbuf *b, const struct scene_object *o)
 {
-	proto_put_u32(b, (uint32_t)o->kind);
-	put_bool(b, o->has_xform);
-	if (o->has_xform)
+	proto_put_u8(b, (uint8_t)o->kind);
+	if (!o->has_xform) {
+		proto_put_u8(b, XF_FORM_NONE);
+	} else if (lin_is_identity(&o->xform)) {
+		proto_put_u8(b, XF_FORM_TRANSLATE);
+		for (int i = 0; i < 3; i++)
+			proto_put_f64(b, o->xform.m[i][3]);
+	} else {
+		proto_put_u8(b, XF_FORM_FULL);
 		for (int i = 0; i < 3; i++)
 			for (int j = 0; j < 4; j++)
 				proto_put_f64(b, o->xform.m[i][j]);
+	}
 	proto_put_u32(b, o->material);
 	put_loc(b, &o->loc);
 	switch (o->kind) {
@@ -242,7 +263,10 @@ int proto_scene_encode(const struct scene *s, uint8_t **out, size_t *len)
 		put_light(&b, &s->lights[i]);
 	proto_put_u32(&b, s->n_objects);
 	for (uint32_t i = 0; i < s->n_objects; i++)
-		put_object(&b, &s->objects[i]);
+	{
+		struct scene_object tmp;
+		put_object(&b, scene_object(s, i, &tmp));
+	}
 	proto_put_u32(&b, s->n_defines);
 	for (uint32_t i = 0; i < s->n_defines; i++) {
 		const struct scene_define *d = &s->defines[i];
@@ -252,9 +276,20 @@ int proto_scene_encode(const struct scene *s, uint8_t **out, size_t *len)
 		for (uint32_t k = 0; k < d->n_objects; k++)
 			proto_put_u32(&b, d->objects[k]);
 	}
-	proto_put_u32(&b, s->n_roots);
+	/* roots as runs of consecutive indices, each as long as it goes (a
+	 * million instances written one after another are one run) */
+	uint32_t n_runs = 0;
 	for (uint32_t i = 0; i < s->n_roots; i++)
+		n_runs += i == 0 || s->roots[i] != s->roots[i - 1] + 1;
+	proto_put_u32(&b, n_runs);
+	for (uint32_t i = 0; i < s->n_roots;) {
+		uint32_t j = i + 1;
+		while (j < s->n_roots && s->roots[j] == s->roots[j - 1] + 1)
+			j++;
 		proto_put_u32(&b, s->roots[i]);
+		proto_put_u32(&b, j - i);
+		i = j;
+	}
 
 	if (b.oom) {
 		proto_wbuf_free(&b);
@@ -525,18 +560,27 @@ static int flush_defines(struct dec *d, struct scene_define *defs, uint32_t n_de
 
 static int dec_object(struct dec *d, struct scene_object *o)
 {
-	uint32_t kind = proto_get_u32(&d->r);
+	uint32_t kind = proto_get_u8(&d->r);
 	memset(o, 0, sizeof *o);
 	if (d->r.err || kind >= PRIM_KIND_COUNT) {
 		bad(d, "unknown object kind");
 		return 1;
 	}
 	scene_object_defaults(o, (enum prim_kind)kind);
-	o->has_xform = get_bool(d);
-	if (o->has_xform)
+	uint8_t form = proto_get_u8(&d->r);
+	o->has_xform = form != XF_FORM_NONE;
+	if (form == XF_FORM_TRANSLATE) {
+		for (int i = 0; i < 3; i++)
+			o->xform.m[i][3] = proto_get_f64(&d->r);
+	} else if (form == XF_FORM_FULL) {
 		for (int i = 0; i < 3; i++)
 			for (int j = 0; j < 4; j++)
 				o->xform.m[i][j] = proto_get_f64(&d->r);
+		if (lin_is_identity(&o->xform)) /* canonical: that one travels as a translation */
+			bad(d, "a full transform whose 3x3 part is the identity");
+	} else if (form != XF_FORM_NONE) {
+		bad(d, "unknown transform form");
+	}
 	o->material = proto_get_u32(&d->r);
 	get_loc(d, &o->loc);
 	switch (o->kind) {
@@ -654,7 +698,8 @@ static int check_nesting(struct dec *d)
 	 * once all objects below the first instance using it are done; compute
 	 * lazily: objects in order, a define's depth from its members on first use */
 	for (uint32_t i = 0; ok && i < s->n_objects; i++) {
-		const struct scene_object *o = &s->objects[i];
+		struct scene_object tmp;
+		const struct scene_object *o = scene_object(s, i, &tmp);
 		uint32_t v = 0;
 		if (o->kind == PRIM_CSG) {
 			uint32_t a = od[o->u.csg.operand1], b = od[o->u.csg.operand2];
@@ -785,7 +830,7 @@ int proto_scene_decode(const uint8_t *p, size_t len, struct scene **out, struct 
 	/* Objects come before defines in the encoding, but the builder wants each
 	 * define added after its members and before its first use: read the
 	 * defines first (they follow the objects), then interleave. */
-	uint32_t n_obj = get_count(&d, LIM_OBJECTS, 17, "too many objects");
+	uint32_t n_obj = get_count(&d, LIM_OBJECTS, 14, "too many objects");
 	size_t obj_start = d.r.pos;
 	{
 		/* skip over the objects to reach the defines: decode them into a
@@ -843,11 +888,22 @@ int proto_scene_decode(const uint8_t *p, size_t len, struct scene **out, struct 
 		goto fail;
 	d.r.pos = roots_start;
 
-	n = get_count(&d, LIM_OBJECTS, 4, "too many roots");
+	n = get_count(&d, LIM_OBJECTS, 8, "too many roots");
+	uint64_t n_roots = 0, run_end = UINT64_MAX;
 	for (uint32_t i = 0; i < n && !d.r.err; i++) {
-		uint32_t root = proto_get_u32(&d.r);
-		if (!d.r.err && (rc = scene_add_root(d.s, root, err)) != 0)
-			goto fail;
+		uint32_t first = proto_get_u32(&d.r), cnt = proto_get_u32(&d.r);
+		if (d.r.err)
+			break;
+		n_roots += cnt;
+		/* canonical: runs are not empty and as long as they go */
+		if (cnt == 0 || first == run_end || (uint64_t)first + cnt > d.s->n_objects || n_roots > LIM_OBJECTS) {
+			bad(&d, "a bad run of roots");
+			break;
+		}
+		run_end = (uint64_t)first + cnt;
+		for (uint32_t k = 0; k < cnt; k++)
+			if ((rc = scene_add_root(d.s, first + k, err)) != 0)
+				goto fail;
 	}
 	if (d.r.err)
 		goto fail;

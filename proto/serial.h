@@ -19,7 +19,7 @@
 
 /* "PSCN" and the encoding's version: bump the version on any layout change. */
 #define PROTO_SCENE_MAGIC 0x5053434eu
-#define PROTO_SCENE_VERSION 1u
+#define PROTO_SCENE_VERSION 2u /* 2: transforms travel in three forms (docs/protocol.md) */
 /* a serialized scene: 1 GiB, the same bound as a scene file */
 #define LIM_SCENE_BYTES (1024ull * 1024 * 1024)
 /* a mesh file name as written in the scene (only a label on the worker) */

@@ -207,7 +207,7 @@ static void test_primitives(void)
 	CHECK(s && s->n_objects == 10 && s->n_roots == 10);
 	if (!s)
 		return;
-	const struct scene_object *o = s->objects;
+	const struct scene_object *o = s->objs; /* no instances here: objs[] is every object */
 	CHECK(o[0].kind == PRIM_SPHERE && veq(o[0].u.sphere.centre, 1, 2, 3) && o[0].u.sphere.radius == 4 &&
 	      veq(o[0].u.sphere.pole, 0, 0, 1) && veq(o[0].u.sphere.equator, 0, 1, 0));
 	CHECK(o[0].material == SCENE_NONE && !o[0].has_xform && o[0].loc.line == 1 && o[0].loc.col == 8);
@@ -230,7 +230,7 @@ static void test_primitives(void)
 	s = ok("object plane ; ; object cylinder ; ; object box ; ; object triangle ; ; object disk ; ;");
 	CHECK(s && s->n_objects == 5);
 	if (s) {
-		o = s->objects;
+		o = s->objs; /* no instances here: objs[] is every object */
 		CHECK(veq(o[0].u.plane.normal, 0, 1, 0) && !o[0].u.plane.has_axes);
 		CHECK(veq(o[1].u.cylinder.from, 0, 0, 0) && veq(o[1].u.cylinder.to, 0, 1, 0) && !o[1].u.cylinder.capped);
 		CHECK(veq(o[2].u.box.b, 1, 1, 1));
@@ -267,8 +267,8 @@ static void test_polygon(void)
 			     "contour (1 1 0) (2 1 0) (2 2 0) ; ; ;");
 	CHECK(s && s->n_objects == 1);
 	if (s) {
-		const struct prim_polygon *p = &s->objects[0].u.polygon;
-		CHECK(s->objects[0].kind == PRIM_POLYGON && p->n_contours == 2 && p->n_points == 7);
+		const struct prim_polygon *p = &scene_object(s, 0, &(struct scene_object){ 0 })->u.polygon;
+		CHECK((*scene_object(s, 0, &(struct scene_object){ 0 })).kind == PRIM_POLYGON && p->n_contours == 2 && p->n_points == 7);
 		CHECK(p->contour_start[0] == 0 && p->contour_start[1] == 4 && p->contour_start[2] == 7);
 		CHECK(veq(p->points[5], 2, 1, 0));
 	}
@@ -291,15 +291,15 @@ static void test_transforms(void)
 	if (!s)
 		return;
 	/* translate first, then rotate: (0 0 0) -> (1 0 0) -> (0 1 0) */
-	vec3 p = m34_point(&s->objects[0].xform, v3(0, 0, 0));
-	CHECK(s->objects[0].has_xform);
+	vec3 p = m34_point(&scene_object(s, 0, &(struct scene_object){ 0 })->xform, v3(0, 0, 0));
+	CHECK((*scene_object(s, 0, &(struct scene_object){ 0 })).has_xform);
 	CHECK_NEAR(p.x, 0, 1e-12);
 	CHECK_NEAR(p.y, 1, 1e-12);
-	p = m34_point(&s->objects[1].xform, v3(1, 1, 1));
+	p = m34_point(&scene_object(s, 1, &(struct scene_object){ 0 })->xform, v3(1, 1, 1));
 	CHECK_NEAR(p.x, 2.5, 1e-12);
 	CHECK_NEAR(p.y, 1, 1e-12);
 	CHECK_NEAR(p.z, 2, 1e-12);
-	p = m34_point(&s->objects[2].xform, v3(0, 0, 0));
+	p = m34_point(&scene_object(s, 2, &(struct scene_object){ 0 })->xform, v3(0, 0, 0));
 	CHECK_NEAR(p.z, 5, 1e-12);
 	scene_free(s);
 	CHECK(fails("object sphere ; shrink-x 0 ;", 1, "t.sce:1:17: error: 'shrink-x' by 0"));
@@ -307,11 +307,11 @@ static void test_transforms(void)
 	s = ok("object sphere ; x-rotate 90 ; object sphere ; y-rotate 90 ; object sphere ; z-rotate 90 ;");
 	CHECK(s && s->n_objects == 3);
 	if (s) {
-		p = m34_point(&s->objects[0].xform, v3(0, 1, 0));
+		p = m34_point(&scene_object(s, 0, &(struct scene_object){ 0 })->xform, v3(0, 1, 0));
 		CHECK(fabs(p.z - 1) < 1e-12);
-		p = m34_point(&s->objects[1].xform, v3(0, 0, 1));
+		p = m34_point(&scene_object(s, 1, &(struct scene_object){ 0 })->xform, v3(0, 0, 1));
 		CHECK(fabs(p.x - 1) < 1e-12);
-		p = m34_point(&s->objects[2].xform, v3(1, 0, 0));
+		p = m34_point(&scene_object(s, 2, &(struct scene_object){ 0 })->xform, v3(1, 0, 0));
 		CHECK(fabs(p.y - 1) < 1e-12);
 	}
 	scene_free(s);
@@ -327,14 +327,14 @@ static void test_csg(void)
 	if (!s)
 		return;
 	CHECK(s->n_roots == 2 && s->n_objects == 8);
-	const struct scene_object *c = &s->objects[s->roots[0]];
+	const struct scene_object *c = scene_object(s, s->roots[0], &(struct scene_object){ 0 });
 	CHECK(c->kind == PRIM_CSG && c->u.csg.op == CSG_SUBTRACT && c->has_xform);
-	CHECK(s->objects[c->u.csg.operand1].kind == PRIM_SPHERE && s->objects[c->u.csg.operand2].kind == PRIM_BOX);
-	CHECK(s->objects[c->u.csg.operand2].material != SCENE_NONE);
-	c = &s->objects[s->roots[1]];
-	CHECK(c->u.csg.op == CSG_UNION && s->objects[c->u.csg.operand1].kind == PRIM_CSG &&
-	      s->objects[s->objects[c->u.csg.operand1].u.csg.operand1].kind == PRIM_BOX &&
-	      s->objects[c->u.csg.operand1].u.csg.op == CSG_INTERSECT);
+	CHECK((*scene_object(s, c->u.csg.operand1, &(struct scene_object){ 0 })).kind == PRIM_SPHERE && (*scene_object(s, c->u.csg.operand2, &(struct scene_object){ 0 })).kind == PRIM_BOX);
+	CHECK((*scene_object(s, c->u.csg.operand2, &(struct scene_object){ 0 })).material != SCENE_NONE);
+	c = scene_object(s, s->roots[1], &(struct scene_object){ 0 });
+	CHECK(c->u.csg.op == CSG_UNION && (*scene_object(s, c->u.csg.operand1, &(struct scene_object){ 0 })).kind == PRIM_CSG &&
+	      (*scene_object(s, (*scene_object(s, c->u.csg.operand1, &(struct scene_object){ 0 })).u.csg.operand1, &(struct scene_object){ 0 })).kind == PRIM_BOX &&
+	      (*scene_object(s, c->u.csg.operand1, &(struct scene_object){ 0 })).u.csg.op == CSG_INTERSECT);
 	scene_free(s);
 	CHECK(fails("object csg operand1 object sphere ; ; union ; ;", 1, "a csg needs 'operand1 object"));
 	CHECK(fails("object csg operand1 sphere ; ;", 1, "'object' expected after 'operand1'"));
@@ -374,11 +374,11 @@ static void test_materials(void)
 	CHECK(strcmp(m->name, "glass") == 0 && veq(m->diff_colour, 0.1, 0.2, 0.3) && veq(m->spec_colour, 0.4, 0.5, 0.6) &&
 	      veq(m->tran_colour, 0.7, 0.8, 0.9) && m->diffuse == 0.2 && m->specular == 0.7 && m->spec_power == 100 &&
 	      m->reflection == 0.3 && m->transparency == 0.9 && m->ior == 1.5);
-	CHECK(s->objects[0].material == 0);
-	CHECK(s->objects[1].material == 2 && s->materials[2].name == NULL && veq(s->materials[2].spec_colour, 1, 0, 0));
-	CHECK(s->objects[2].material == 3 && strcmp(s->materials[3].name, "red2") == 0);
-	CHECK(s->objects[3].material == 1);
-	CHECK(s->objects[4].material == SCENE_NONE);
+	CHECK((*scene_object(s, 0, &(struct scene_object){ 0 })).material == 0);
+	CHECK((*scene_object(s, 1, &(struct scene_object){ 0 })).material == 2 && s->materials[2].name == NULL && veq(s->materials[2].spec_colour, 1, 0, 0));
+	CHECK((*scene_object(s, 2, &(struct scene_object){ 0 })).material == 3 && strcmp(s->materials[3].name, "red2") == 0);
+	CHECK((*scene_object(s, 3, &(struct scene_object){ 0 })).material == 1);
+	CHECK((*scene_object(s, 4, &(struct scene_object){ 0 })).material == SCENE_NONE);
 	CHECK(scene_find_material(s, "RED2") == 3);
 	scene_free(s);
 
@@ -482,17 +482,17 @@ static void test_define(void)
 		return;
 	CHECK(s->n_defines == 2 && s->n_roots == 3);
 	const struct scene_define *d = &s->defines[0];
-	CHECK(strcmp(d->name, "athing") == 0 && d->n_objects == 2 && s->objects[d->objects[0]].kind == PRIM_SPHERE &&
-	      s->objects[d->objects[1]].kind == PRIM_BOX);
+	CHECK(strcmp(d->name, "athing") == 0 && d->n_objects == 2 && (*scene_object(s, d->objects[0], &(struct scene_object){ 0 })).kind == PRIM_SPHERE &&
+	      (*scene_object(s, d->objects[1], &(struct scene_object){ 0 })).kind == PRIM_BOX);
 	d = &s->defines[1];
-	CHECK(d->n_objects == 2 && s->objects[d->objects[0]].kind == PRIM_INSTANCE &&
-	      s->objects[d->objects[0]].u.instance.define == 0 && s->objects[d->objects[1]].has_xform);
-	const struct scene_object *o = &s->objects[s->roots[0]];
+	CHECK(d->n_objects == 2 && (*scene_object(s, d->objects[0], &(struct scene_object){ 0 })).kind == PRIM_INSTANCE &&
+	      (*scene_object(s, d->objects[0], &(struct scene_object){ 0 })).u.instance.define == 0 && (*scene_object(s, d->objects[1], &(struct scene_object){ 0 })).has_xform);
+	const struct scene_object *o = scene_object(s, s->roots[0], &(struct scene_object){ 0 });
 	CHECK(o->kind == PRIM_INSTANCE && o->u.instance.define == 0 && o->has_xform);
-	o = &s->objects[s->roots[1]];
+	o = scene_object(s, s->roots[1], &(struct scene_object){ 0 });
 	CHECK(o->kind == PRIM_INSTANCE && o->u.instance.define == 1 && o->has_xform &&
 	      o->material == scene_find_material(s, "m2"));
-	o = &s->objects[s->roots[2]];
+	o = scene_object(s, s->roots[2], &(struct scene_object){ 0 });
 	CHECK(o->u.instance.define == 1 && o->material == scene_find_material(s, "m2"));
 	struct scene_stats st;
 	scene_stats(s, &st);
@@ -529,7 +529,7 @@ static void test_scene_level(void)
 	CHECK(fails("object sphere ; ; ;", 1, "unknown verb in scene file near ';'"));
 	/* comments and case everywhere */
 	struct scene *s = ok("~ header ~ OBJECT // comment\n SPHERE RADIUS 2 ~ inline ~ ; MATERIAL COLOUR (1 0 0) ; ;");
-	CHECK(s && s->n_objects == 1 && s->objects[0].u.sphere.radius == 2);
+	CHECK(s && s->n_objects == 1 && (*scene_object(s, 0, &(struct scene_object){ 0 })).u.sphere.radius == 2);
 	scene_free(s);
 	/* a long name is quoted shortened */
 	char name[200];
@@ -569,14 +569,14 @@ static void test_many(void)
 	t0 = clock();
 	s = ok(buf);
 	secs = (double)(clock() - t0) / CLOCKS_PER_SEC;
-	CHECK(s && s->n_materials == 20000 && s->n_objects > 10000 && s->objects[123].material == 123);
+	CHECK(s && s->n_materials == 20000 && s->n_objects > 10000 && (*scene_object(s, 123, &(struct scene_object){ 0 })).material == 123);
 	CHECK(secs < 2.0);
 	scene_free(s);
 	free(buf);
 	/* a redefined name: the latest wins */
 	s = ok("material named a colour (1 0 0) ; material named A colour (0 1 0) ; object sphere ; material called a ; ; "
 	       "define object name d object sphere ; ; ; ; define object name D object box ; ; ; ; object d ; ;");
-	CHECK(s && s->objects[0].material == 1 && s->objects[s->roots[1]].u.instance.define == 1);
+	CHECK(s && (*scene_object(s, 0, &(struct scene_object){ 0 })).material == 1 && (*scene_object(s, s->roots[1], &(struct scene_object){ 0 })).u.instance.define == 1);
 	scene_free(s);
 }
 
@@ -633,9 +633,9 @@ static void test_files(void)
 	if (s) {
 		CHECK(s->n_lights == 1 && veq(s->lights[0].position, 1, 2, 3));
 		CHECK(s->n_objects == 3 && s->n_meshes == 2); /* same file and options: one mesh */
-		CHECK(s->objects[0].u.raw.mesh == s->objects[1].u.raw.mesh);
-		CHECK(s->objects[0].material == scene_find_material(s, "INC-RED"));
-		const struct scene_mesh *m = &s->meshes[s->objects[0].u.raw.mesh];
+		CHECK((*scene_object(s, 0, &(struct scene_object){ 0 })).u.raw.mesh == (*scene_object(s, 1, &(struct scene_object){ 0 })).u.raw.mesh);
+		CHECK((*scene_object(s, 0, &(struct scene_object){ 0 })).material == scene_find_material(s, "INC-RED"));
+		const struct scene_mesh *m = &s->meshes[(*scene_object(s, 0, &(struct scene_object){ 0 })).u.raw.mesh];
 		CHECK(m->n_triangles == 2 && m->n_vertices == 4 && m->smooth && m->weld == 0.001 && m->rotation.x == 90);
 		CHECK(s->meshes[1].weld == 0.00001 && !s->meshes[1].smooth);
 		CHECK(s->camera.depth == 2 && s->image.xsize == 10);

@@ -252,6 +252,92 @@ static void test_default_material_threads(void)
 	}
 }
 
+/* Adds an instance of define 0 with transform m (has: has_xform) and
+ * material mat; returns its object index. */
+static uint32_t add_inst(struct scene *s, const mat34 *m, bool has, uint32_t mat, int line)
+{
+	struct scene_object o;
+	scene_object_defaults(&o, PRIM_INSTANCE);
+	o.u.instance.define = 0;
+	o.xform = *m;
+	o.has_xform = has;
+	o.material = mat;
+	o.loc.file = scene_intern_file(s, line % 2 ? "a.sce" : "b.sce");
+	o.loc.line = line;
+	o.loc.col = 70000 + line;
+	uint32_t id = SCENE_NONE;
+	struct scene_error err;
+	CHECK(scene_add_object(s, &o, &id, &err) == 0);
+	return id;
+}
+
+/* Instances are stored as compact records (INSTANCES in scene.h) and read
+ * back bit for bit: translations, shared 3x3 parts, -0 in a 3x3 part, no
+ * transform, material, define and location. */
+static void test_compact_instances(void)
+{
+	struct scene *s = scene_new();
+	struct scene_error err;
+	struct scene_object sph;
+	scene_object_defaults(&sph, PRIM_SPHERE);
+	uint32_t sid;
+	CHECK(scene_add_object(s, &sph, &sid, &err) == 0);
+	struct scene_define d = { 0 };
+	d.name = strdup("ball");
+	d.objects = malloc(sizeof *d.objects);
+	d.objects[0] = sid;
+	d.n_objects = 1;
+	CHECK(scene_add_define(s, &d, NULL, &err) == 0);
+	struct scene_material mat;
+	scene_material_defaults(&mat);
+	CHECK(scene_add_material(s, &mat, NULL, &err) == 0);
+
+	mat34 m[7];
+	m[0] = m34_identity();                                   /* no transform */
+	m[1] = m34_identity();
+	scene_xform_op(&m[1], XF_TRANSLATE, 0, 0, v3(1.5, -0.0, 1e-300)); /* a translation, -0 kept */
+	m[2] = m34_identity();
+	scene_xform_op(&m[2], XF_ROTATE, 1, 30, v3(0, 0, 0));
+	scene_xform_op(&m[2], XF_TRANSLATE, 0, 0, v3(0.1, 0.2, 0.3));
+	m[3] = m[2];                                             /* the same rotation: shared */
+	m[3].m[0][3] = 7;
+	m[4] = m34_identity();
+	m[4].m[0][1] = -0.0; /* equal to the identity, but not its bits: kept as written */
+	m[5] = m34_identity();                                   /* has_xform with the identity */
+	m[6] = m[1];
+	bool has[7] = { false, true, true, true, true, true, true };
+	uint32_t mats[7] = { SCENE_NONE, 0, SCENE_NONE, 0, 0, SCENE_NONE, 0 };
+	uint32_t id[7];
+	for (int k = 0; k < 7; k++)
+		id[k] = add_inst(s, &m[k], has[k], mats[k], k + 1);
+	CHECK(s->n_objects == 8 && s->n_insts == 7 && s->n_objs == 1);
+	CHECK(s->n_lins == 2); /* m[2] and m[3] share one; m[4] has its own */
+	for (int k = 0; k < 7; k++) {
+		struct scene_object o = scene_object_at(s, id[k]);
+		CHECK(scene_is_inst(s, id[k]) && scene_kind(s, id[k]) == PRIM_INSTANCE);
+		CHECK(o.kind == PRIM_INSTANCE && o.u.instance.define == 0 && o.material == mats[k]);
+		CHECK(o.has_xform == has[k] && memcmp(&o.xform, &m[k], sizeof(mat34)) == 0);
+		CHECK(o.loc.line == k + 1 && o.loc.col == 70001 + k && strcmp(o.loc.file, (k + 1) % 2 ? "a.sce" : "b.sce") == 0);
+	}
+	CHECK(!scene_is_inst(s, sid) && scene_kind(s, sid) == PRIM_SPHERE);
+	struct scene_stats st;
+	scene_stats(s, &st);
+	CHECK(st.by_kind[PRIM_INSTANCE] == 7 && st.by_kind[PRIM_SPHERE] == 1 && st.prims_instanced == 0);
+	/* an instance whose file the scene did not intern gets its own copy */
+	struct scene_object o;
+	scene_object_defaults(&o, PRIM_INSTANCE);
+	o.u.instance.define = 0;
+	o.loc.file = "elsewhere.sce";
+	uint32_t eid;
+	CHECK(scene_add_object(s, &o, &eid, &err) == 0);
+	struct scene_object back = scene_object_at(s, eid);
+	CHECK(back.loc.file != o.loc.file && strcmp(back.loc.file, "elsewhere.sce") == 0);
+	/* an undefined define is refused as before */
+	o.u.instance.define = 5;
+	CHECK(scene_add_object(s, &o, &eid, &err) != 0 && s->n_objects == 9);
+	scene_free(s);
+}
+
 int main(void)
 {
 	test_default_material_threads(); /* first: the first use is what races */
@@ -260,5 +346,6 @@ int main(void)
 	test_builder();
 	test_mesh_stats();
 	test_stats_saturate();
+	test_compact_instances();
 	TEST_MAIN_END();
 }

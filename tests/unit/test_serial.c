@@ -58,11 +58,11 @@ static void test_fixture(void)
 		CHECK(strcmp(t->meshes[0].file, "smooth.raw") == 0);
 		CHECK(t->lights[2].shape == LIGHT_CYLINDER && t->lights[3].no_shadows);
 		uint32_t poly = s->roots[9];
-		CHECK(t->objects[poly].kind == PRIM_POLYGON && t->objects[poly].u.polygon.n_points == 7 &&
-		      t->objects[poly].u.polygon.contour_start[1] == 4);
-		CHECK(memcmp(&t->objects[0].xform, &s->objects[0].xform, sizeof(mat34)) == 0);
+		CHECK((*scene_object(t, poly, &(struct scene_object){ 0 })).kind == PRIM_POLYGON && (*scene_object(t, poly, &(struct scene_object){ 0 })).u.polygon.n_points == 7 &&
+		      (*scene_object(t, poly, &(struct scene_object){ 0 })).u.polygon.contour_start[1] == 4);
+		CHECK(memcmp(&scene_object(t, 0, &(struct scene_object){ 0 })->xform, &scene_object(s, 0, &(struct scene_object){ 0 })->xform, sizeof(mat34)) == 0);
 		CHECK(strcmp(t->defines[1].name, "wall") == 0 && t->defines[0].n_objects == 2);
-		CHECK(strcmp(t->objects[0].loc.file, PROTO_SCENE_FILE) == 0);
+		CHECK(strcmp((*scene_object(t, 0, &(struct scene_object){ 0 })).loc.file, PROTO_SCENE_FILE) == 0);
 		struct scene_stats st1, st2;
 		scene_stats(s, &st1);
 		scene_stats(t, &st2);
@@ -209,9 +209,129 @@ static void test_parsed(void)
 	}
 }
 
+/* Offset of the only occurrence of the 8 bytes of big-endian double v in
+ * a[0..len), or -1 (none or several). */
+static long find_f64(const uint8_t *a, size_t len, double v)
+{
+	uint64_t u;
+	memcpy(&u, &v, sizeof u);
+	uint8_t be[8];
+	for (int i = 0; i < 8; i++)
+		be[i] = (uint8_t)(u >> (56 - 8 * i));
+	long at = -1;
+	for (size_t i = 0; i + 8 <= len; i++)
+		if (memcmp(a + i, be, 8) == 0) {
+			if (at >= 0)
+				return -1;
+			at = (long)i;
+		}
+	return at;
+}
+
+/* Version 2's transform forms: none, a translation (3 doubles), or 12
+ * doubles, each round trip exact (a -0 in the 3x3 part travels in full);
+ * a full form whose 3x3 part is the identity's bits, and an unknown form,
+ * are refused (the encoding stays canonical). */
+static void test_xform_forms(void)
+{
+	struct scene *s = scene_new();
+	struct scene_error err;
+	struct scene_object o;
+	uint32_t id[4];
+	for (int k = 0; k < 4; k++) {
+		scene_object_defaults(&o, PRIM_SPHERE);
+		if (k == 1)
+			scene_xform_op(&o.xform, XF_TRANSLATE, 0, 0, v3(1.25, -0.0, 3));
+		if (k == 2)
+			o.xform.m[0][1] = -0.0;
+		if (k == 3)
+			o.xform.m[1][1] = 2.75; /* a stretch: found and patched below */
+		o.has_xform = k > 0;
+		CHECK(scene_add_object(s, &o, &id[k], &err) == 0);
+		CHECK(scene_add_root(s, id[k], &err) == 0);
+	}
+	size_t len = 0;
+	uint8_t *a = round_trip(s, &len);
+	CHECK(a != NULL);
+	struct scene *t = NULL;
+	if (a && proto_scene_decode(a, len, &t, &err) == 0) {
+		for (int k = 0; k < 4; k++) {
+			struct scene_object x = scene_object_at(s, id[k]), y = scene_object_at(t, id[k]);
+			CHECK(x.has_xform == y.has_xform && memcmp(&x.xform, &y.xform, sizeof(mat34)) == 0);
+		}
+		scene_free(t);
+		t = NULL;
+		/* 2.75 -> 1.0: a full transform with the identity's 3x3 part */
+		long at = find_f64(a, len, 2.75);
+		CHECK(at > 0);
+		if (at > 0) {
+			uint8_t one[8] = { 0x3f, 0xf0, 0, 0, 0, 0, 0, 0 };
+			memcpy(a + at, one, 8);
+			CHECK(proto_scene_decode(a, len, &t, &err) != 0 && t == NULL);
+			CHECK(strstr(err.msg, "identity") != NULL);
+			/* the form byte before the 12 doubles (material and the
+			 * 3x3 part's first row: 4 doubles before 2.75): form 3 */
+			long form = at - 5 * 8 - 1;
+			CHECK(a[form] == 2);
+			a[form] = 3;
+			CHECK(proto_scene_decode(a, len, &t, &err) != 0 && t == NULL);
+			CHECK(strstr(err.msg, "transform form") != NULL);
+		}
+	}
+	free(a);
+	scene_free(s);
+}
+
+/* Roots travel as runs of consecutive indices: any order round trips; an
+ * empty run, a run past the objects and a run that continues the one
+ * before (not canonical) are refused. */
+static void test_root_runs(void)
+{
+	struct scene *s = scene_new();
+	struct scene_error err;
+	for (int k = 0; k < 6; k++) {
+		struct scene_object o;
+		scene_object_defaults(&o, PRIM_SPHERE);
+		CHECK(scene_add_object(s, &o, NULL, &err) == 0);
+	}
+	static const uint32_t roots[] = { 0, 1, 2, 5, 3, 3, 4 }; /* runs (0,3) (5,1) (3,1) (3,2) */
+	for (size_t k = 0; k < sizeof roots / sizeof *roots; k++)
+		CHECK(scene_add_root(s, roots[k], &err) == 0);
+	size_t len = 0;
+	uint8_t *a = round_trip(s, &len);
+	struct scene *t = NULL;
+	CHECK(a != NULL && proto_scene_decode(a, len, &t, &err) == 0);
+	if (t) {
+		CHECK(t->n_roots == 7 && memcmp(t->roots, roots, sizeof roots) == 0);
+		scene_free(t);
+		t = NULL;
+	}
+	if (a && len > 40) {
+		uint8_t *tail = a + len - 8; /* the last run: (3, 2) */
+		CHECK(tail[3] == 3 && tail[7] == 2);
+		tail[7] = 0; /* empty */
+		CHECK(proto_scene_decode(a, len, &t, &err) != 0 && strstr(err.msg, "run of roots") != NULL);
+		tail[7] = 4; /* 3 + 4 > 6 objects */
+		CHECK(proto_scene_decode(a, len, &t, &err) != 0 && strstr(err.msg, "run of roots") != NULL);
+		tail[7] = 1;
+		tail[3] = 4; /* (3,1) then (4,1): one run written as two */
+		CHECK(proto_scene_decode(a, len, &t, &err) != 0 && strstr(err.msg, "run of roots") != NULL);
+		tail[3] = 0; /* (0,1): fine */
+		int rc = proto_scene_decode(a, len, &t, &err);
+		if (rc)
+			fprintf(stderr, "%s\n", err.msg);
+		CHECK(rc == 0 && t && t->n_roots == 6 && t->roots[5] == 0);
+		scene_free(t);
+	}
+	free(a);
+	scene_free(s);
+}
+
 int main(void)
 {
 	test_parsed();
+	test_xform_forms();
+	test_root_runs();
 	test_fixture();
 	test_hostile_counts();
 	test_deep_nesting();
