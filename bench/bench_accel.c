@@ -16,22 +16,13 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
-#include <time.h>
 #include <unistd.h>
 
 #include "common/accel.h"
 #include "common/parse.h"
 #include "common/raw.h"
 #include "common/rng.h"
-
-/* Rates use this thread's CPU time: the figures hold on a machine shared
- * with other work (wall-clock rates there would measure the neighbours). */
-static double now(void)
-{
-	struct timespec t;
-	clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
+#include "bench/bench_scene.h"
 
 static double peak_rss_mb(void)
 {
@@ -46,7 +37,7 @@ static double primary_mrays(const struct accel *a, const struct scene_camera *c,
 	vec3 view = v3_sub(c->look_at, c->look_from), vu = v3_norm(view);
 	vec3 right = v3_norm(v3_cross(c->drop_line, view)), down = v3_norm(v3_cross(view, right));
 	long rays = 0, hits = 0;
-	double t0 = now(), dt;
+	double t0 = bs_cpu_now(), dt;
 	do {
 		for (int j = 0; j < H; j++)
 			for (int i = 0; i < W; i++) {
@@ -58,7 +49,7 @@ static double primary_mrays(const struct accel *a, const struct scene_camera *c,
 				hits += accel_intersect(a, &r, &h);
 			}
 		rays += (long)W * H;
-		dt = now() - t0;
+		dt = bs_cpu_now() - t0;
 	} while (dt < 0.5);
 	*hit_pct = (int)(100 * hits / rays);
 	return rays / dt / 1e6;
@@ -70,7 +61,7 @@ static double random_mrays(const struct accel *a)
 	if (!accel_bounds(a, &lo, &hi))
 		lo = v3(-1, -1, -1), hi = v3(1, 1, 1);
 	long rays = 0;
-	double t0 = now(), dt;
+	double t0 = bs_cpu_now(), dt;
 	do {
 		for (int k = 0; k < 50000; k++, rays++) {
 			uint64_t q = (uint64_t)rays * 5;
@@ -82,7 +73,7 @@ static double random_mrays(const struct accel *a)
 			struct hit h;
 			accel_intersect(a, &r, &h);
 		}
-		dt = now() - t0;
+		dt = bs_cpu_now() - t0;
 	} while (dt < 0.5);
 	return rays / dt / 1e6;
 }
@@ -175,105 +166,13 @@ static void bench_raw(const char *path)
 	scene_free(s);
 }
 
-/* A closed 1,000-triangle mesh: a 20 x 25 latitude-longitude sphere of radius r. */
-static uint32_t mesh_1000(struct scene *s, double r)
-{
-	enum { NU = 25, NV = 20 };
-	struct scene_mesh m;
-	struct scene_error err;
-	memset(&m, 0, sizeof m);
-	m.file = strdup("ball1000");
-	m.n_vertices = (NV + 1) * NU;
-	m.n_triangles = NV * NU * 2;
-	m.vertices = malloc(m.n_vertices * sizeof *m.vertices);
-	m.tris = malloc(3 * (size_t)m.n_triangles * sizeof *m.tris);
-	for (int j = 0; j <= NV; j++)
-		for (int i = 0; i < NU; i++) {
-			double th = M_PI * j / NV, ph = 2 * M_PI * i / NU;
-			m.vertices[j * NU + i] = v3(r * sin(th) * cos(ph), r * cos(th), r * sin(th) * sin(ph));
-		}
-	uint32_t k = 0;
-	for (int j = 0; j < NV; j++)
-		for (int i = 0; i < NU; i++) {
-			uint32_t a = j * NU + i, b = j * NU + (i + 1) % NU, c = a + NU, d = b + NU;
-			uint32_t t[6] = { a, c, b, b, c, d };
-			memcpy(&m.tris[k], t, sizeof t);
-			k += 6;
-		}
-	uint32_t id;
-	if (scene_add_mesh(s, &m, &id, &err))
-		abort();
-	return id;
-}
-
-static uint32_t add_obj(struct scene *s, struct scene_object *o)
-{
-	struct scene_error err;
-	uint32_t id;
-	if (scene_add_object(s, o, &id, &err)) {
-		fprintf(stderr, "%s\n", err.msg);
-		abort();
-	}
-	return id;
-}
-
-static uint32_t add_define(struct scene *s, const char *name, uint32_t *objs, uint32_t n)
-{
-	struct scene_define d;
-	struct scene_error err;
-	memset(&d, 0, sizeof d);
-	d.name = strdup(name);
-	d.n_objects = n;
-	d.objects = objs; /* ownership moves to the scene */
-	uint32_t id;
-	if (scene_add_define(s, &d, &id, &err))
-		abort();
-	return id;
-}
-
-static uint32_t add_instance(struct scene *s, uint32_t def, vec3 at)
-{
-	struct scene_object o;
-	scene_object_defaults(&o, PRIM_INSTANCE);
-	o.u.instance.define = def;
-	scene_xform_op(&o.xform, XF_TRANSLATE, 0, 0, at);
-	o.has_xform = true;
-	return add_obj(s, &o);
-}
-
 /* 1,000,000 instances of a 1,000-triangle ball: nested 100^3 or flat. */
 static void bench_million(bool nested)
 {
-	double rss0 = peak_rss_mb(), t0 = now();
+	double rss0 = peak_rss_mb(), t0 = bs_cpu_now();
 	struct scene *s = scene_new();
-	uint32_t mesh = mesh_1000(s, 0.4);
-	struct scene_object o;
-	scene_object_defaults(&o, PRIM_RAW);
-	o.u.raw.mesh = mesh;
-	uint32_t ball = add_obj(s, &o);
-	uint32_t *one = malloc(sizeof *one);
-	*one = ball;
-	uint32_t d_ball = add_define(s, "ball", one, 1);
-	if (nested) {
-		uint32_t *row = malloc(100 * sizeof *row);
-		for (int i = 0; i < 100; i++)
-			row[i] = add_instance(s, d_ball, v3(i, 0, 0));
-		uint32_t d_row = add_define(s, "row", row, 100);
-		uint32_t *wall = malloc(100 * sizeof *wall);
-		for (int i = 0; i < 100; i++)
-			wall[i] = add_instance(s, d_row, v3(0, i, 0));
-		uint32_t d_wall = add_define(s, "wall", wall, 100);
-		for (int i = 0; i < 100; i++) {
-			struct scene_error err;
-			scene_add_root(s, add_instance(s, d_wall, v3(0, 0, i)), &err);
-		}
-	} else {
-		for (int k = 0; k < 1000000; k++) {
-			struct scene_error err;
-			scene_add_root(s, add_instance(s, d_ball, v3(k % 100, (k / 100) % 100, k / 10000)), &err);
-		}
-	}
-	double t_scene = now() - t0;
+	bs_million(s, nested ? BS_NESTED : BS_FLAT);
+	double t_scene = bs_cpu_now() - t0;
 	double rss_scene = peak_rss_mb();
 	struct accel *a;
 	struct scene_error err;

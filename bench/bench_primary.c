@@ -19,18 +19,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "common/accel.h"
 #include "common/camera.h"
-#include "common/parse.h"
-
-static double cpu_now(void)
-{
-	struct timespec t;
-	clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
+#include "bench/bench_scene.h"
 
 /* FNV-1a over n bytes. */
 static uint64_t fnv(uint64_t h, const void *p, size_t n)
@@ -125,17 +117,9 @@ int main(int argc, char **argv)
 		return 64;
 	}
 	struct scene *s;
-	struct scene_error err;
-	if (parse_files(NULL, path, &s, &err)) {
-		printf("%s: %s\n", path, err.msg);
-		return 1;
-	}
 	struct accel *a;
-	if (accel_build(s, &a, &err)) {
-		printf("%s: %s\n", path, err.msg);
-		scene_free(s);
+	if (bs_load(path, &s, &a))
 		return 1;
-	}
 	struct cam c;
 	if (cam_init(&c, &s->camera, w, h) < 0) {
 		printf("%s: degenerate camera\n", path);
@@ -155,12 +139,12 @@ int main(int argc, char **argv)
 	frame_packets(a, &c, &hash_p, row2, hit2);
 	double best = INFINITY;
 	for (int i = 0; i < frames; i++) {
-		double t0 = cpu_now();
+		double t0 = bs_cpu_now();
 		if (single)
 			frame_single(a, &c, NULL);
 		else
 			frame_packets(a, &c, NULL, NULL, NULL);
-		double t = cpu_now() - t0;
+		double t = bs_cpu_now() - t0;
 		best = t < best ? t : best;
 	}
 	printf("%s %ux%u: %.2f Mrays/s on 1 thread, %s (best of %d frames, thread CPU time); hits hash %016llx%s\n",

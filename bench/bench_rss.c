@@ -23,102 +23,12 @@
 #include "common/render.h"
 #include "common/scene.h"
 #include "common/tiles.h"
+#include "bench/bench_scene.h"
+#include "tests/unit/rss.h"
 
-#define N_SIDE 100 /* 100^3 = 1,000,000 instances */
-
-/* The calling process's high-water mark of resident memory in KiB (Linux
- * /proc), or -1. */
-static long hwm_kib(void)
+static void stage(const char *what)
 {
-	char line[256];
-	FILE *f = fopen("/proc/self/status", "r");
-	if (!f)
-		return -1;
-	long kib = -1;
-	while (fgets(line, sizeof line, f))
-		if (sscanf(line, "VmHWM: %ld", &kib) == 1)
-			break;
-	fclose(f);
-	return kib;
-}
-
-static void stage(const char *what) { printf("    %-34s VmHWM %7.1f MB\n", what, hwm_kib() / 1024.0); }
-
-/* A closed 1,000-triangle mesh: a 20 x 25 latitude-longitude sphere of radius r. */
-static uint32_t mesh_1000(struct scene *s, double r)
-{
-	enum { NU = 25, NV = 20 };
-	struct scene_mesh m;
-	struct scene_error err;
-	memset(&m, 0, sizeof m);
-	m.file = strdup("ball1000.raw");
-	m.weld = 0.00001;
-	m.n_vertices = (NV + 1) * NU;
-	m.n_triangles = NV * NU * 2;
-	m.vertices = malloc(m.n_vertices * sizeof *m.vertices);
-	m.tris = malloc(3 * (size_t)m.n_triangles * sizeof *m.tris);
-	if (!m.file || !m.vertices || !m.tris)
-		abort();
-	for (int j = 0; j <= NV; j++)
-		for (int i = 0; i < NU; i++) {
-			double th = M_PI * j / NV, ph = 2 * M_PI * i / NU;
-			m.vertices[j * NU + i] = v3(r * sin(th) * cos(ph), r * cos(th), r * sin(th) * sin(ph));
-		}
-	uint32_t k = 0;
-	for (int j = 0; j < NV; j++)
-		for (int i = 0; i < NU; i++) {
-			uint32_t a = j * NU + i, b = j * NU + (i + 1) % NU, c = a + NU, d = b + NU;
-			uint32_t t[6] = { a, c, b, b, c, d };
-			memcpy(&m.tris[k], t, sizeof t);
-			k += 6;
-		}
-	uint32_t id;
-	if (scene_add_mesh(s, &m, &id, &err))
-		abort();
-	return id;
-}
-
-static uint32_t add_obj(struct scene *s, struct scene_object *o)
-{
-	struct scene_error err;
-	uint32_t id;
-	if (scene_add_object(s, o, &id, &err)) {
-		fprintf(stderr, "%s\n", err.msg);
-		abort();
-	}
-	return id;
-}
-
-/* define NAME over objs[0..n) (ownership of objs moves to the scene) */
-static uint32_t add_define(struct scene *s, const char *name, uint32_t *objs, uint32_t n)
-{
-	struct scene_define d;
-	struct scene_error err;
-	memset(&d, 0, sizeof d);
-	d.name = strdup(name);
-	d.n_objects = n;
-	d.objects = objs;
-	uint32_t id;
-	if (scene_add_define(s, &d, &id, &err))
-		abort();
-	return id;
-}
-
-static uint32_t add_instance(struct scene *s, uint32_t def, vec3 at)
-{
-	struct scene_object o;
-	scene_object_defaults(&o, PRIM_INSTANCE);
-	o.u.instance.define = def;
-	scene_xform_op(&o.xform, XF_TRANSLATE, 0, 0, at);
-	o.has_xform = true;
-	return add_obj(s, &o);
-}
-
-static void root(struct scene *s, uint32_t obj)
-{
-	struct scene_error err;
-	if (scene_add_root(s, obj, &err))
-		abort();
+	printf("    %-34s VmHWM %7.1f MB\n", what, proc_status_kib("self", "VmHWM") / 1024.0);
 }
 
 /* The child's work: scene, renderer, a 160x120 image. */
@@ -139,27 +49,7 @@ static int run(const char *kind)
 	l.position = v3(-100, 300, -200);
 	if (scene_add_light(s, &l, &err))
 		return 1;
-	struct scene_object o;
-	scene_object_defaults(&o, PRIM_RAW);
-	o.u.raw.mesh = mesh_1000(s, 0.4);
-	uint32_t ball = add_obj(s, &o);
-	uint32_t *one = malloc(sizeof *one);
-	*one = ball;
-	uint32_t d_ball = add_define(s, "ball", one, 1);
-	if (!strcmp(kind, "nested")) {
-		uint32_t *row = malloc(N_SIDE * sizeof *row), *wall = malloc(N_SIDE * sizeof *wall);
-		for (int i = 0; i < N_SIDE; i++)
-			row[i] = add_instance(s, d_ball, v3(i, 0, 0));
-		uint32_t d_row = add_define(s, "row", row, N_SIDE);
-		for (int i = 0; i < N_SIDE; i++)
-			wall[i] = add_instance(s, d_row, v3(0, i, 0));
-		uint32_t d_wall = add_define(s, "wall", wall, N_SIDE);
-		for (int i = 0; i < N_SIDE; i++)
-			root(s, add_instance(s, d_wall, v3(0, 0, i)));
-	} else if (!strcmp(kind, "flat")) {
-		for (int k = 0; k < N_SIDE * N_SIDE * N_SIDE; k++)
-			root(s, add_instance(s, d_ball, v3(k % N_SIDE, (k / N_SIDE) % N_SIDE, k / (N_SIDE * N_SIDE))));
-	}
+	bs_million(s, !strcmp(kind, "nested") ? BS_NESTED : !strcmp(kind, "flat") ? BS_FLAT : BS_NONE);
 	stage("scene model built");
 	struct renderer *r;
 	if (renderer_new(s, &r, &err)) {

@@ -21,18 +21,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "common/accel.h"
 #include "common/camera.h"
-#include "common/parse.h"
-
-static double cpu_now(void)
-{
-	struct timespec t;
-	clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
+#include "bench/bench_scene.h"
 
 /* Shadow rays in packets of four: n live rays (the rest repeat the last)
  * toward light `light`. */
@@ -142,17 +134,9 @@ int main(int argc, char **argv)
 		return 64;
 	}
 	struct scene *sc;
-	struct scene_error err;
-	if (parse_files(NULL, path, &sc, &err)) {
-		printf("%s: %s\n", path, err.msg);
-		return 1;
-	}
 	struct accel *a;
-	if (accel_build(sc, &a, &err)) {
-		printf("%s: %s\n", path, err.msg);
-		scene_free(sc);
+	if (bs_load(path, &sc, &a))
 		return 1;
-	}
 	struct cam c;
 	struct set s = { 0 };
 	if (cam_init(&c, &sc->camera, w, h) < 0 || make_rays(sc, a, &c, &s)) {
@@ -166,9 +150,9 @@ int main(int argc, char **argv)
 		hash[m] = pass(a, &s, (enum mode)m, sc->n_lights);
 	for (int f = 0; f < frames; f++) /* interleaved, so a load change hits all three */
 		for (int m = 0; m < 3; m++) {
-			double t0 = cpu_now();
+			double t0 = bs_cpu_now();
 			pass(a, &s, (enum mode)m, sc->n_lights);
-			double t = cpu_now() - t0;
+			double t = bs_cpu_now() - t0;
 			best[m] = t < best[m] ? t : best[m];
 		}
 	printf("%s %ux%u: %zu shadow rays (%.2f per pixel), best of %d, thread CPU time:\n", path, w, h, s.rays,

@@ -1,0 +1,156 @@
+/*
+ * bench_scene.h - what the benchmarks share: thread CPU time, loading a
+ * scene file with its acceleration structure, and the million-instance
+ * scene of issues 3 and 13 built through the builder calls (bench_accel,
+ * bench_rss). Builder refusals abort: a benchmark scene that fails to build
+ * is a bug in the benchmark. Static inline so each binary takes what it uses.
+ */
+#ifndef PORTRAY_BENCH_SCENE_H
+#define PORTRAY_BENCH_SCENE_H
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "common/accel.h"
+#include "common/parse.h"
+#include "common/scene.h"
+#include "tests/unit/build_util.h"
+
+/* This thread's CPU time in seconds: rates measured with it hold on a
+ * machine shared with other work (wall-clock rates would measure the
+ * neighbours). */
+static inline double bs_cpu_now(void)
+{
+	struct timespec t;
+	clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* Parses path and builds its acceleration structure into *s and *a (the
+ * caller frees both); on failure prints "path: message", frees what it
+ * made and returns 1. */
+static inline int bs_load(const char *path, struct scene **s, struct accel **a)
+{
+	struct scene_error err;
+	if (parse_files(NULL, path, s, &err)) {
+		printf("%s: %s\n", path, err.msg);
+		return 1;
+	}
+	if (accel_build(*s, a, &err)) {
+		printf("%s: %s\n", path, err.msg);
+		scene_free(*s);
+		return 1;
+	}
+	return 0;
+}
+
+/* A closed 1,000-triangle mesh: a 20 x 25 latitude-longitude sphere of
+ * radius r; returns its mesh index. */
+static inline uint32_t bs_mesh_1000(struct scene *s, double r)
+{
+	enum { NU = 25, NV = 20 };
+	struct scene_mesh m;
+	struct scene_error err;
+	memset(&m, 0, sizeof m);
+	m.file = strdup("ball1000.raw");
+	m.weld = 0.00001;
+	m.n_vertices = (NV + 1) * NU;
+	m.n_triangles = NV * NU * 2;
+	m.vertices = malloc(m.n_vertices * sizeof *m.vertices);
+	m.tris = malloc(3 * (size_t)m.n_triangles * sizeof *m.tris);
+	if (!m.file || !m.vertices || !m.tris)
+		abort();
+	for (int j = 0; j <= NV; j++)
+		for (int i = 0; i < NU; i++) {
+			double th = M_PI * j / NV, ph = 2 * M_PI * i / NU;
+			m.vertices[j * NU + i] = v3(r * sin(th) * cos(ph), r * cos(th), r * sin(th) * sin(ph));
+		}
+	uint32_t k = 0;
+	for (int j = 0; j < NV; j++)
+		for (int i = 0; i < NU; i++) {
+			uint32_t a = j * NU + i, b = j * NU + (i + 1) % NU, c = a + NU, d = b + NU;
+			uint32_t t[6] = { a, c, b, b, c, d };
+			memcpy(&m.tris[k], t, sizeof t);
+			k += 6;
+		}
+	uint32_t id;
+	if (scene_add_mesh(s, &m, &id, &err))
+		abort();
+	return id;
+}
+
+/* define NAME over objs[0..n) (ownership of objs moves to the scene);
+ * returns its index. */
+static inline uint32_t bs_add_define(struct scene *s, const char *name, uint32_t *objs, uint32_t n)
+{
+	struct scene_define d;
+	struct scene_error err;
+	memset(&d, 0, sizeof d);
+	d.name = strdup(name);
+	d.n_objects = n;
+	d.objects = objs;
+	uint32_t id;
+	if (scene_add_define(s, &d, &id, &err))
+		abort();
+	return id;
+}
+
+/* An instance of define def translated to at; returns its object index. */
+static inline uint32_t bs_add_instance(struct scene *s, uint32_t def, vec3 at)
+{
+	struct scene_object o;
+	scene_object_defaults(&o, PRIM_INSTANCE);
+	o.u.instance.define = def;
+	scene_xform_op(&o.xform, XF_TRANSLATE, 0, 0, at);
+	o.has_xform = true;
+	return bu_add(s, &o);
+}
+
+static inline void bs_root(struct scene *s, uint32_t obj)
+{
+	struct scene_error err;
+	if (scene_add_root(s, obj, &err))
+		abort();
+}
+
+#define BS_SIDE 100 /* 100^3 = 1,000,000 instances */
+
+enum bs_million { BS_NONE, BS_FLAT, BS_NESTED };
+
+/* Adds a define "ball" holding one bs_mesh_1000 of radius 0.4 and, unless
+ * kind is BS_NONE, 1,000,000 instances of it on a unit grid as roots:
+ * BS_FLAT, 1,000,000 root instances of the ball (each its own
+ * translation); BS_NESTED, the same million drawn through three levels of
+ * 100 instances (defines "row" and "wall"). */
+static inline void bs_million(struct scene *s, enum bs_million kind)
+{
+	struct scene_object o;
+	scene_object_defaults(&o, PRIM_RAW);
+	o.u.raw.mesh = bs_mesh_1000(s, 0.4);
+	uint32_t *one = malloc(sizeof *one);
+	if (!one)
+		abort();
+	*one = bu_add(s, &o);
+	uint32_t d_ball = bs_add_define(s, "ball", one, 1);
+	if (kind == BS_NESTED) {
+		uint32_t *row = malloc(BS_SIDE * sizeof *row), *wall = malloc(BS_SIDE * sizeof *wall);
+		if (!row || !wall)
+			abort();
+		for (int i = 0; i < BS_SIDE; i++)
+			row[i] = bs_add_instance(s, d_ball, v3(i, 0, 0));
+		uint32_t d_row = bs_add_define(s, "row", row, BS_SIDE);
+		for (int i = 0; i < BS_SIDE; i++)
+			wall[i] = bs_add_instance(s, d_row, v3(0, i, 0));
+		uint32_t d_wall = bs_add_define(s, "wall", wall, BS_SIDE);
+		for (int i = 0; i < BS_SIDE; i++)
+			bs_root(s, bs_add_instance(s, d_wall, v3(0, 0, i)));
+	} else if (kind == BS_FLAT) {
+		for (int k = 0; k < BS_SIDE * BS_SIDE * BS_SIDE; k++)
+			bs_root(s, bs_add_instance(s, d_ball,
+						   v3(k % BS_SIDE, (k / BS_SIDE) % BS_SIDE, k / (BS_SIDE * BS_SIDE))));
+	}
+}
+
+#endif
