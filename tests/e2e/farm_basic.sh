@@ -3,9 +3,7 @@
 # byte-identical to the local render, with and without local threads, and
 # at a --size other than the scene's.
 . "$(dirname "$0")/farm_lib.inc"
-start_worker a -j 1
-start_worker b -j 2
-W=127.0.0.1:$a_PORT,127.0.0.1:$b_PORT
+start_pair 2
 
 local_render "$SCENE" "$T/local.ppm"
 "$BIN/portray-master" "$SCENE" -o "$T/farm.ppm" -w "$W" --no-local --tile 16 2>"$T/m1.log" ||

@@ -9,9 +9,7 @@
 . "$(dirname "$0")/farm_lib.inc"
 PIXSTAT=$TOOLS/pixstat
 [ -x "$PIXSTAT" ] || fail "$PIXSTAT missing (make test builds it)"
-start_worker a -j 1
-start_worker b -j 2
-W=127.0.0.1:$a_PORT,127.0.0.1:$b_PORT
+start_pair 2
 for f in png png16 ppm pfm exr exr-half; do
 	local_render "$SCENE" "$T/local.$f" --format $f --no-render-time --size 48x36
 	"$BIN/portray-master" "$SCENE" -o "$T/farm.$f" --format $f --no-render-time --size 48x36 -w "$W" --no-local \

@@ -6,9 +6,7 @@
 # change the scene before it is sent, so workers trace what the master
 # traces).
 . "$(dirname "$0")/farm_lib.inc"
-start_worker a -j 1
-start_worker b -j 2
-W=127.0.0.1:$a_PORT,127.0.0.1:$b_PORT
+start_pair 2
 
 # ppm_crop IN X0 Y0 X1 Y1 OUT: the region of a binary PPM as a PPM
 ppm_crop() {

@@ -10,9 +10,7 @@ LC=$TOOLS/liveclient
 [ -x "$LC" ] || fail "no $LC (make test builds it)"
 CHROMIUM=${CHROMIUM:-$(command -v chromium || command -v chromium-browser || command -v google-chrome)}
 [ -n "$CHROMIUM" ] && [ -x "$CHROMIUM" ] || { echo "no chromium installed"; exit 77; }
-start_worker a -j 1
-start_worker b -j 1
-W=127.0.0.1:$a_PORT,127.0.0.1:$b_PORT
+start_pair
 
 "$BIN/portray-master" "$SLOW" -o "$T/farm.ppm" -w "$W" --size 640x480 --tile 8 -j 1 --http 127.0.0.1:0 \
 	--http-port-file "$T/http.port" --http-linger 60 2>"$T/master.log" &

@@ -10,9 +10,7 @@
 . "$(dirname "$0")/farm_lib.inc"
 LC=$TOOLS/liveclient
 [ -x "$LC" ] || fail "no $LC (make test builds it)"
-start_worker a -j 1
-start_worker b -j 1
-W=127.0.0.1:$a_PORT,127.0.0.1:$b_PORT
+start_pair
 OPTS="--size 480x360 --tile 8 -j 1"
 local_render "$SLOW" "$T/ref.ppm" $OPTS
 

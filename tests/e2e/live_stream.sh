@@ -23,9 +23,7 @@ grep -q "http-public" "$T/bad.err" || true
 "$BIN/portray-master" /nonexistent.sce --http 0.0.0.0:0 2>"$T/bad.err"
 grep -q -- "--http-public" "$T/bad.err" || fail "the refusal does not name --http-public: $(cat "$T/bad.err")"
 
-start_worker a -j 1
-start_worker b -j 1
-W=127.0.0.1:$a_PORT,127.0.0.1:$b_PORT
+start_pair
 # slow enough (16 samples a pixel, 8-pixel tiles) that viewers join in time
 OPTS="--size 640x480 --tile 8 -j 1"
 
