@@ -128,14 +128,8 @@ done
 # colour 1.5 on a white sphere gives values above 1 in the PFM (linear: up
 # to about 2) where the 8-bit files clamp to 255, and a smooth gradient below; byte-identical across
 # threads and tiles too, and the same values as OpenEXR's FLOAT channels
-cat >"$TMP/bright.sce" <<'SCE'
-camera look-from (0 0 10) look-at (0 0 0) drop-line (0 -1 0) depth 1 x-size 0.8 y-size 0.6 ;
-image xsize 64 ysize 48 ;
-light colour (1.5 1.5 1.5) position (-5 5 10) ;
-object sphere centre (0 0 0) radius 3 ; material colour (0.9 0.9 0.9) ; ;
-SCE
 SCENE_SAVED=$SCENE
-SCENE=$TMP/bright.sce
+SCENE=$ROOT/tests/data/bright.sce
 render "$TMP/br.pfm" -j 1 --tile 8
 "$PIXSTAT" "$TMP/br.pfm" >"$TMP/stat" || fail "pixstat: $(cat "$TMP/stat")"
 read -r _ _ _ _ max _ above _ below _ levels <"$TMP/stat"

@@ -21,18 +21,13 @@ for f in png png16 ppm pfm exr exr-half; do
 done
 
 # values above 1 come through the farm as they are
-cat >"$T/bright.sce" <<'SCE'
-camera look-from (0 0 10) look-at (0 0 0) drop-line (0 -1 0) depth 1 x-size 0.8 y-size 0.6 ;
-image xsize 64 ysize 48 ;
-light colour (1.5 1.5 1.5) position (-5 5 10) ;
-object sphere centre (0 0 0) radius 3 ; material colour (0.9 0.9 0.9) ; ;
-SCE
-local_render "$T/bright.sce" "$T/local_b.pfm" -j 1 --tile 8
+BRIGHT=$E2E/../data/bright.sce
+local_render "$BRIGHT" "$T/local_b.pfm" -j 1 --tile 8
 "$PIXSTAT" "$T/local_b.pfm" >"$T/stat" || fail "pixstat: $(cat "$T/stat")"
 read -r _ _ _ _ _ _ above _ <"$T/stat"
 [ "$above" -gt 1000 ] || fail "bright PFM: $above values above 1 ($(cat "$T/stat"))"
 for tile in 5 32 64; do
-	"$BIN/portray-master" "$T/bright.sce" -o "$T/farm_b.pfm" -w "$W" --no-local --tile $tile 2>"$T/m.log" ||
+	"$BIN/portray-master" "$BRIGHT" -o "$T/farm_b.pfm" -w "$W" --no-local --tile $tile 2>"$T/m.log" ||
 		fail "farm render of the bright scene (--tile $tile) failed"
 	cmp "$T/local_b.pfm" "$T/farm_b.pfm" || fail "farm bright PFM (--tile $tile) differs from the local render"
 done
@@ -41,7 +36,7 @@ done
 # beside an honest worker (20 ms a tile: the liar takes part whatever the load)
 start_worker liar -j 1 --test-fault lie
 start_worker slow -j 1 --test-delay-ms 20
-"$BIN/portray-master" "$T/bright.sce" -o "$T/farm_l.pfm" -w "127.0.0.1:$slow_PORT,127.0.0.1:$liar_PORT" \
+"$BIN/portray-master" "$BRIGHT" -o "$T/farm_l.pfm" -w "127.0.0.1:$slow_PORT,127.0.0.1:$liar_PORT" \
 	--no-local --tile 8 2>"$T/ml.log" || fail "farm render with a float liar failed"
 cmp "$T/local_b.pfm" "$T/farm_l.pfm" || fail "PFM differs with a lying worker"
 grep -q "worker 127.0.0.1:$liar_PORT returned wrong pixels" "$T/ml.log" || fail "the float liar was not caught"
