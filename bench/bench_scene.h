@@ -14,6 +14,7 @@
 #include <time.h>
 
 #include "common/accel.h"
+#include "common/camera.h"
 #include "common/parse.h"
 #include "common/scene.h"
 #include "tests/unit/build_util.h"
@@ -44,6 +45,19 @@ static inline int bs_load(const char *path, struct scene **s, struct accel **a)
 		return 1;
 	}
 	return 0;
+}
+
+/* The camera rays of the 2x2 pixel block at (x, y) into r, as the renderer
+ * makes them (a block past the image's edge repeats its last row or
+ * column), traced by one accel_intersect4 into h and hit. */
+static inline void bs_block_hits(const struct accel *a, const struct cam *c, uint32_t x, uint32_t y, struct ray r[4],
+				 struct hit h[4], bool hit[4])
+{
+	for (uint32_t i = 0; i < 4; i++) {
+		uint32_t px = x + (i & 1), py = y + (i >> 1);
+		r[i] = cam_ray(c, (px < c->w ? px : c->w - 1) + 0.5, (py < c->h ? py : c->h - 1) + 0.5);
+	}
+	accel_intersect4(a, r, h, hit);
 }
 
 /* A closed 1,000-triangle mesh: a 20 x 25 latitude-longitude sphere of

@@ -63,11 +63,7 @@ static int make_rays(const struct scene *sc, const struct accel *a, const struct
 			struct ray r[4];
 			struct hit h[4];
 			bool hit[4];
-			for (uint32_t i = 0; i < 4; i++) {
-				uint32_t px = x + (i & 1), py = y + (i >> 1);
-				r[i] = cam_ray(c, (px < c->w ? px : c->w - 1) + 0.5, (py < c->h ? py : c->h - 1) + 0.5);
-			}
-			accel_intersect4(a, r, h, hit);
+			bs_block_hits(a, c, x, y, r, h, hit);
 			for (uint32_t l = 0; l < sc->n_lights; l++) {
 				const struct scene_light *L = &sc->lights[l];
 				if (L->shape != LIGHT_POINT || L->no_shadows)
