@@ -101,15 +101,11 @@ int main(int argc, char **argv)
 		argc--;
 		argv++;
 	}
-	const char *path = argc > 1 ? argv[1] : "tests/data/spd/balls_s4.sce";
-	int frames = argc > 2 ? atoi(argv[2]) : 15;
-	unsigned w = 1280, h = 960;
-	if (argc > 3 && sscanf(argv[3], "%ux%u", &w, &h) != 2) {
+	const char *path;
+	int frames;
+	unsigned w, h;
+	if (bs_args(argc, argv, 15, &path, &frames, &w, &h)) {
 		fprintf(stderr, "usage: bench_primary [--single] [SCENE [FRAMES [WIDTHxHEIGHT]]]\n");
-		return 64;
-	}
-	if (frames < 1 || w == 0 || h == 0 || w > 100000 || h > 100000) {
-		fprintf(stderr, "bench_primary: bad frame count or size\n");
 		return 64;
 	}
 	struct scene *s;

@@ -29,6 +29,21 @@ static inline double bs_cpu_now(void)
 	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+/* The A/B benchmarks' arguments, [SCENE [FRAMES [WIDTHxHEIGHT]]]: SCENE
+ * defaults to tests/data/spd/balls_s4.sce, FRAMES to def_frames, the size
+ * to 1280x960. Returns -1 (the caller prints its usage) on a size that
+ * does not parse, fewer than one frame, or a side of 0 or over 100,000. */
+static inline int bs_args(int argc, char **argv, int def_frames, const char **path, int *frames, unsigned *w,
+			  unsigned *h)
+{
+	*path = argc > 1 ? argv[1] : "tests/data/spd/balls_s4.sce";
+	*frames = argc > 2 ? atoi(argv[2]) : def_frames;
+	*w = 1280, *h = 960;
+	if (argc > 3 && sscanf(argv[3], "%ux%u", w, h) != 2)
+		return -1;
+	return *frames < 1 || *w == 0 || *h == 0 || *w > 100000 || *h > 100000 ? -1 : 0;
+}
+
 /* Parses path and builds its acceleration structure into *s and *a (the
  * caller frees both); on failure prints "path: message", frees what it
  * made and returns 1. */

@@ -121,11 +121,10 @@ static uint64_t pass(const struct accel *a, const struct set *s, enum mode m, ui
 
 int main(int argc, char **argv)
 {
-	const char *path = argc > 1 ? argv[1] : "tests/data/spd/balls_s4.sce";
-	int frames = argc > 2 ? atoi(argv[2]) : 7;
-	unsigned w = 1280, h = 960;
-	if ((argc > 3 && sscanf(argv[3], "%ux%u", &w, &h) != 2) || frames < 1 || w == 0 || h == 0 || w > 100000 ||
-	    h > 100000) {
+	const char *path;
+	int frames;
+	unsigned w, h;
+	if (bs_args(argc, argv, 7, &path, &frames, &w, &h)) {
 		fprintf(stderr, "usage: bench_shadow [SCENE [FRAMES [WIDTHxHEIGHT]]]\n");
 		return 64;
 	}
