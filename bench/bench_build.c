@@ -9,6 +9,7 @@
  * PNG encoder's time for a 1280x960 frame is printed too (1 and 2
  * threads; img_set_threads). Not a test: prints figures only.
  */
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -60,9 +61,13 @@ static char *slurp_file(const char *path, size_t *n)
 
 static void bench_mesh(const char *shared, const char *mesh)
 {
-	char sce[4096], raw[4096];
-	snprintf(sce, sizeof sce, "%s/meshes/teapot.sce", shared);
-	snprintf(raw, sizeof raw, "%s/meshes/%s.raw", shared, mesh);
+	char sce[PATH_MAX + 32], raw[PATH_MAX + 32], dir[PATH_MAX];
+	/* the mesh's path goes into the scene text, read as relative to the
+	 * scene's folder: make it absolute (PORTRAY_SHARED may be relative) */
+	if (!realpath(shared, dir))
+		snprintf(dir, sizeof dir, "%s", shared);
+	snprintf(sce, sizeof sce, "%s/meshes/teapot.sce", dir);
+	snprintf(raw, sizeof raw, "%s/meshes/%s.raw", dir, mesh);
 	size_t n;
 	char *text = slurp_file(sce, &n);
 	FILE *probe = fopen(raw, "rb");
