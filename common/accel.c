@@ -1546,19 +1546,31 @@ bool accel_intersect(const struct accel *a, const struct ray *r, struct hit *h)
 	return group_hit(a, a->root, &t, h, false);
 }
 
+#if defined(__SSE2__)
+/* Whether the four rays can be traced as a packet through the root's tree
+ * (all valid, one octant, a 4-wide tree): then tr and *oct are set up. */
+static inline bool packet_start(const struct accel *a, const struct ray r[4], struct trace tr[4], uint32_t *oct)
+{
+	const struct group *g = a->root;
+	if (!g || g->bvh.root_n || !g->bvh.n_nodes4 || g->big_leaf)
+		return false;
+	*oct = ray_octant(r[0].d);
+	for (int i = 0; i < 4; i++)
+		if (!ray_ok(&r[i]) || ray_octant(r[i].d) != *oct)
+			return false;
+	for (int i = 0; i < 4; i++)
+		trace_init(&tr[i], r[i].o, r[i].d, ray_tmin(&r[i]), r[i].tmax);
+	return true;
+}
+#endif
+
 void accel_intersect4(const struct accel *a, const struct ray r[4], struct hit h[4], bool hit[4])
 {
 #if defined(__SSE2__)
-	const struct group *g = a->root;
-	bool packet = g && !g->bvh.root_n && g->bvh.n_nodes4 && !g->big_leaf;
-	uint32_t oct = ray_octant(r[0].d);
-	for (int i = 0; i < 4 && packet; i++)
-		packet = ray_ok(&r[i]) && ray_octant(r[i].d) == oct;
-	if (packet) {
-		struct trace tr[4];
-		for (int i = 0; i < 4; i++)
-			trace_init(&tr[i], r[i].o, r[i].d, ray_tmin(&r[i]), r[i].tmax);
-		group_hit4(a, g, tr, oct, h, hit);
+	struct trace tr[4];
+	uint32_t oct;
+	if (packet_start(a, r, tr, &oct)) {
+		group_hit4(a, a->root, tr, oct, h, hit);
 		return;
 	}
 #endif
@@ -1601,16 +1613,10 @@ bool accel_occluded_hint(const struct accel *a, const struct ray *r, uint32_t *h
 void accel_occluded4(const struct accel *a, const struct ray r[4], bool occ[4], uint32_t *hint)
 {
 #if defined(__SSE2__)
-	const struct group *g = a->root;
-	bool packet = g && !g->bvh.root_n && g->bvh.n_nodes4 && !g->big_leaf;
-	uint32_t oct = ray_octant(r[0].d);
-	for (int i = 0; i < 4 && packet; i++)
-		packet = ray_ok(&r[i]) && ray_octant(r[i].d) == oct;
-	if (packet) {
-		struct trace tr[4];
-		for (int i = 0; i < 4; i++)
-			trace_init(&tr[i], r[i].o, r[i].d, ray_tmin(&r[i]), r[i].tmax);
-		group_occluded4(a, g, tr, oct, occ, hint);
+	struct trace tr[4];
+	uint32_t oct;
+	if (packet_start(a, r, tr, &oct)) {
+		group_occluded4(a, a->root, tr, oct, occ, hint);
 		return;
 	}
 #endif

@@ -51,8 +51,8 @@ struct hconn {
 	bool polling_out;       /* POLLOUT asked for: the socket was full */
 	bool peer_eof;          /* the peer shut its side: no more reading */
 	/* HC_STREAM: tiles to send (a bit each) and tiles the viewer shows */
-	uint64_t *todo, *shown;
-	uint32_t n_todo, cursor;
+	uint64_t *pending, *shown;
+	uint32_t n_pending, cursor;
 	bool end_queued;
 };
 
@@ -242,17 +242,17 @@ static void conn_close(struct hconn *c)
 	struct http *h = c->h;
 	if (c->st == HC_FREE)
 		return;
-	if (c->todo)
+	if (c->pending)
 		h->n_streams--;
 	ev_timer_stop(h->loop, &c->tm);
 	ev_io_del(h->loop, c->fd);
 	close(c->fd);
 	free(c->req);
-	free(c->todo);
+	free(c->pending);
 	free(c->shown);
 	proto_wbuf_free(&c->out);
 	c->req = NULL;
-	c->todo = c->shown = NULL;
+	c->pending = c->shown = NULL;
 	c->st = HC_FREE;
 	c->fd = -1;
 	if (h->n_streams == 0)
@@ -307,17 +307,17 @@ static void append_status_event(struct http *h, struct hconn *c, const char *nam
 }
 
 /* The next tile of c's set, from its cursor on (wrapping); the set is not empty. */
-static uint32_t todo_next(struct hconn *c)
+static uint32_t pending_next(struct hconn *c)
 {
 	uint32_t words = c->h->words, wi = c->cursor / 64;
-	uint64_t m = c->todo[wi] & (~(uint64_t)0 << (c->cursor % 64));
+	uint64_t m = c->pending[wi] & (~(uint64_t)0 << (c->cursor % 64));
 	while (!m) {
 		wi = wi + 1 == words ? 0 : wi + 1;
-		m = c->todo[wi];
+		m = c->pending[wi];
 	}
 	uint32_t id = wi * 64 + (uint32_t)__builtin_ctzll(m);
-	c->todo[wi] &= ~((uint64_t)1 << (id % 64));
-	c->n_todo--;
+	c->pending[wi] &= ~((uint64_t)1 << (id % 64));
+	c->n_pending--;
 	c->cursor = id + 1 == c->h->n_tiles ? 0 : id + 1;
 	return id;
 }
@@ -332,11 +332,11 @@ static void stream_fill(struct hconn *c)
 		c->out.len -= c->out_off;
 		c->out_off = 0;
 	}
-	while (c->out.len < HTTP_LOW_WATER && c->n_todo > 0) {
-		uint32_t id = todo_next(c);
+	while (c->out.len < HTTP_LOW_WATER && c->n_pending > 0) {
+		uint32_t id = pending_next(c);
 		append_tile_event(h, c, id, sched_tile_pixels(h->f->s, id, h->px));
 	}
-	if (c->n_todo == 0 && h->ended && !c->end_queued && c->out.len < HTTP_LOW_WATER) {
+	if (c->n_pending == 0 && h->ended && !c->end_queued && c->out.len < HTTP_LOW_WATER) {
 		append_status_event(h, c, "end");
 		c->end_queued = true;
 	}
@@ -481,20 +481,20 @@ static void start_stream(struct hconn *c, bool head)
 		respond_error(c, 503);
 		return;
 	}
-	c->todo = calloc(h->words, sizeof *c->todo);
+	c->pending = calloc(h->words, sizeof *c->pending);
 	c->shown = calloc(h->words, sizeof *c->shown);
-	if (!c->todo || !c->shown) {
-		free(c->todo);
+	if (!c->pending || !c->shown) {
+		free(c->pending);
 		free(c->shown);
-		c->todo = c->shown = NULL;
+		c->pending = c->shown = NULL;
 		respond_error(c, 503);
 		return;
 	}
 	h->n_streams++;
 	/* every tile, done or not: the image so far comes first */
 	for (uint32_t i = 0; i < h->n_tiles; i++)
-		c->todo[i / 64] |= (uint64_t)1 << (i % 64);
-	c->n_todo = h->n_tiles;
+		c->pending[i / 64] |= (uint64_t)1 << (i % 64);
+	c->n_pending = h->n_tiles;
 	c->cursor = 0;
 	free(c->req);
 	c->req = NULL;
@@ -786,9 +786,9 @@ static void on_tiles(void *arg, struct farm *f, const uint32_t *ids, uint32_t n)
 			continue;
 		for (uint32_t k = 0; k < n; k++) {
 			uint64_t bit = (uint64_t)1 << (ids[k] % 64);
-			if (!(c->todo[ids[k] / 64] & bit)) {
-				c->todo[ids[k] / 64] |= bit;
-				c->n_todo++;
+			if (!(c->pending[ids[k] / 64] & bit)) {
+				c->pending[ids[k] / 64] |= bit;
+				c->n_pending++;
 			}
 		}
 		if (!c->polling_out)
