@@ -435,6 +435,15 @@ static void observe_changes(struct farm *f)
 			f->obs[i].tiles(f->obs[i].arg, f, ids, n);
 }
 
+/* The change list between wakes: sched wakes the loop for a change at most
+ * every SCHED_CHANGE_WAKE_S, so the observers look that often too. */
+static void on_observe(struct ev_loop *l, void *arg)
+{
+	struct farm *f = arg;
+	observe_changes(f);
+	ev_timer_arm(l, &f->observe, net_now() + SCHED_CHANGE_WAKE_S);
+}
+
 /* The scheduler or an interrupt has news: the render ended, a worker was
  * caught (its tiles are back in the queue), or we are cancelled. */
 static void on_wake(struct ev_loop *l, void *arg)
@@ -587,6 +596,10 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	/* the journal's tiles are done before anything is taken (after the other observers: they see them) */
 	if (jn && journal_attach(jn, &f) < 0)
 		goto out;
+	if (f.n_obs) {
+		ev_timer_init(&f.observe, on_observe, &f);
+		ev_timer_arm(f.loop, &f.observe, net_now() + SCHED_CHANGE_WAKE_S);
+	}
 	/* before the workers start: one failing at once already asks join_check */
 	f.join_deadline = f.t0 + o->join_timeout_s;
 	ev_timer_init(&f.join, on_join, &f);

@@ -155,6 +155,7 @@ struct farm {
 	uint32_t invalid_results;
 	struct farm_observer obs[FARM_OBSERVERS_MAX];
 	uint32_t n_obs;
+	struct ev_timer observe; /* drains the change list between its wakes (SCHED_CHANGE_WAKE_S) */
 	int rc;                 /* the loop's verdict */
 	/* the local threads, started at once or (--min-workers) once enough workers joined */
 	const struct tile_source *src;

@@ -124,8 +124,10 @@ void sched_stats(struct sched *s, struct sched_stats *out);
 /* ---- observers (the live view, the journal): what changed, and its pixels ---- */
 
 /* From now on, keep a list of the tiles stored, or undone (their worker was
- * caught lying), and wake the loop when it turns non-empty. 0, or -1 when
- * out of memory. */
+ * caught lying), and wake the loop when it turns non-empty, unless a change
+ * woke it less than SCHED_CHANGE_WAKE_S ago: an observer's loop drains the
+ * list at least that often by itself (a timer). 0, or -1 when out of memory. */
+#define SCHED_CHANGE_WAKE_S 0.05
 int sched_observe(struct sched *s);
 /* Moves up to max tile ids from that list into ids (each once however often
  * it changed; look at its pixels to see what it is now). Returns how many. */
