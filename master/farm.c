@@ -522,7 +522,8 @@ int farm_render(const struct master_opts *o, const uint8_t *scene, size_t scene_
 	f.px = px;
 	f.cancel = cancel;
 	f.lfd = -1;
-	(void)proto_build_id(); /* the pixel probe, rendered now (a few ms), not in the first handshake */
+	if (f.farmed) /* the pixel probe, rendered now (a few ms), not in the first handshake */
+		(void)proto_build_id();
 	int rc = EXIT_USAGE;
 	struct worker_addr *addrs = NULL;
 	struct http *view = NULL;
