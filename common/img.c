@@ -789,6 +789,21 @@ static void filter_paeth(const uint8_t *cur, const uint8_t *up, size_t rb, size_
 static uint64_t filter_cost(const uint8_t *d, size_t n)
 {
 	uint64_t sum = 0;
+#if defined(__SSE2__)
+	/* |v| of a signed byte v is min(v, -v) read unsigned (-128: 128 both
+	 * ways); psadbw sums 8 of them into each 64-bit half */
+	__m128i acc = _mm_setzero_si128(), z = _mm_setzero_si128();
+	size_t j = 0;
+	for (; j + 16 <= n; j += 16) {
+		__m128i v = _mm_loadu_si128((const __m128i *)(const void *)(d + j));
+		acc = _mm_add_epi64(acc, _mm_sad_epu8(_mm_min_epu8(v, _mm_sub_epi8(z, v)), z));
+	}
+	uint64_t half[2];
+	_mm_storeu_si128((__m128i *)(void *)half, acc);
+	sum = half[0] + half[1];
+	d += j;
+	n -= j;
+#endif
 	for (size_t at = 0; at < n; at += 65536) {
 		size_t m = n - at < 65536 ? n - at : 65536;
 		uint32_t part = 0;
