@@ -5,6 +5,14 @@
 
 #include <string.h>
 
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#define SHA256_X86_NI 1
+#include <cpuid.h>
+#include <immintrin.h>
+#else
+#define SHA256_X86_NI 0
+#endif
+
 /* first 32 bits of the fractional parts of the cube roots of the first 64 primes */
 static const uint32_t sha256_k[64] = {
 	0x428a2f98, 0x71374491, 0xb5c0fbcf, 0xe9b5dba5, 0x3956c25b, 0x59f111f1, 0x923f82a4, 0xab1c5ed5,
@@ -16,6 +24,9 @@ static const uint32_t sha256_k[64] = {
 	0x19a4c116, 0x1e376c08, 0x2748774c, 0x34b0bcb5, 0x391c0cb3, 0x4ed8aa4a, 0x5b9cca4f, 0x682e6ff3,
 	0x748f82ee, 0x78a5636f, 0x84c87814, 0x8cc70208, 0x90befffa, 0xa4506ceb, 0xbef9a3f7, 0xc67178f2,
 };
+
+/* sha256.h: 0 keeps the portable code whatever the CPU (tests compare the two) */
+int sha256_use_ni = 1;
 
 static inline uint32_t rotr(uint32_t x, int n)
 {
@@ -57,6 +68,88 @@ static void sha256_block(uint32_t h[8], const uint8_t *p)
 	h[7] += hh;
 }
 
+#if SHA256_X86_NI
+/*
+ * The same compression with the x86 SHA extensions (SHA-NI), for CPUs that
+ * have them (cpuid leaf 7, EBX bit 29; with SSSE3 and SSE4.1, which every
+ * such CPU has): a scene of a few MB is hashed by the master and by each
+ * worker, and the portable code took 10% of a render of the dragon (227 M
+ * instructions for its 3.6 MB encoding).
+ *
+ * The instructions keep the state as two vectors, ABEF and CDGH (A in the
+ * highest lane); sha256rnds2 does two rounds, taking its two words of
+ * W + K from the low half of its third operand. The schedule for words
+ * 16..63 four at a time: W[t..t+3] = msg2(msg1(W[t-16..t-13], W[t-12..t-9])
+ * + W[t-7..t-4], W[t-4..t-1]), where msg1 adds sigma0 and msg2 the sigma1
+ * terms (FIPS 180-4 6.2.2 step 1, as sha256_block).
+ */
+__attribute__((target("sha,sse4.1,ssse3"))) static void sha256_blocks_ni(uint32_t h[8], const uint8_t *p,
+									   size_t nblocks)
+{
+	/* big-endian words: reverse the bytes of each 32-bit lane */
+	const __m128i bswap = _mm_set_epi8(12, 13, 14, 15, 8, 9, 10, 11, 4, 5, 6, 7, 0, 1, 2, 3);
+	__m128i dcba = _mm_loadu_si128((const __m128i *)(const void *)&h[0]);
+	__m128i hgfe = _mm_loadu_si128((const __m128i *)(const void *)&h[4]);
+	__m128i cdab = _mm_shuffle_epi32(dcba, 0xB1);
+	__m128i efgh = _mm_shuffle_epi32(hgfe, 0x1B);
+	__m128i abef = _mm_alignr_epi8(cdab, efgh, 8);
+	__m128i cdgh = _mm_blend_epi16(efgh, cdab, 0xF0);
+	for (; nblocks; nblocks--, p += SHA256_BLOCK_BYTES) {
+		__m128i abef0 = abef, cdgh0 = cdgh, w[4];
+		for (int g = 0; g < 16; g++) {
+			__m128i x;
+			if (g < 4) {
+				x = _mm_shuffle_epi8(_mm_loadu_si128((const __m128i *)(const void *)(p + 16 * g)), bswap);
+			} else {
+				__m128i t = _mm_add_epi32(_mm_sha256msg1_epu32(w[g & 3], w[(g + 1) & 3]),
+							  _mm_alignr_epi8(w[(g + 3) & 3], w[(g + 2) & 3], 4));
+				x = _mm_sha256msg2_epu32(t, w[(g + 3) & 3]);
+			}
+			w[g & 3] = x;
+			__m128i wk = _mm_add_epi32(x, _mm_loadu_si128((const __m128i *)(const void *)&sha256_k[4 * g]));
+			cdgh = _mm_sha256rnds2_epu32(cdgh, abef, wk);
+			abef = _mm_sha256rnds2_epu32(abef, cdgh, _mm_shuffle_epi32(wk, 0x0E));
+		}
+		abef = _mm_add_epi32(abef, abef0);
+		cdgh = _mm_add_epi32(cdgh, cdgh0);
+	}
+	__m128i feba = _mm_shuffle_epi32(abef, 0x1B);
+	__m128i dchg = _mm_shuffle_epi32(cdgh, 0xB1);
+	_mm_storeu_si128((__m128i *)(void *)&h[0], _mm_blend_epi16(feba, dchg, 0xF0));
+	_mm_storeu_si128((__m128i *)(void *)&h[4], _mm_alignr_epi8(dchg, feba, 8));
+}
+
+/* 1: the CPU has SHA-NI (and the SSSE3 and SSE4.1 it comes with), 0: not. */
+static int sha256_have_ni(void)
+{
+	static int have = -1; /* a race only computes the same answer twice */
+	if (have < 0) {
+		unsigned a, b, c, d;
+		int ni = 0;
+		if (__get_cpuid_max(0, NULL) >= 7 && __get_cpuid(1, &a, &b, &c, &d) && (c & bit_SSSE3) &&
+		    (c & bit_SSE4_1)) {
+			__cpuid_count(7, 0, a, b, c, d);
+			ni = (b >> 29) & 1;
+		}
+		have = ni;
+	}
+	return have;
+}
+#endif
+
+/* Processes nblocks 64-byte blocks. */
+static void sha256_blocks(uint32_t h[8], const uint8_t *p, size_t nblocks)
+{
+#if SHA256_X86_NI
+	if (sha256_use_ni && sha256_have_ni()) {
+		sha256_blocks_ni(h, p, nblocks);
+		return;
+	}
+#endif
+	for (; nblocks; nblocks--, p += SHA256_BLOCK_BYTES)
+		sha256_block(h, p);
+}
+
 void sha256_init(struct sha256 *c)
 {
 	static const uint32_t iv[8] = { 0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a,
@@ -80,11 +173,13 @@ void sha256_update(struct sha256 *c, const void *data, size_t n)
 		n -= k;
 		if (c->n < SHA256_BLOCK_BYTES)
 			return;
-		sha256_block(c->h, c->buf);
+		sha256_blocks(c->h, c->buf, 1);
 		c->n = 0;
 	}
-	for (; n >= SHA256_BLOCK_BYTES; p += SHA256_BLOCK_BYTES, n -= SHA256_BLOCK_BYTES)
-		sha256_block(c->h, p);
+	size_t nb = n / SHA256_BLOCK_BYTES;
+	sha256_blocks(c->h, p, nb);
+	p += nb * SHA256_BLOCK_BYTES;
+	n -= nb * SHA256_BLOCK_BYTES;
 	memcpy(c->buf, p, n);
 	c->n = n;
 }
@@ -104,13 +199,13 @@ void sha256_final(struct sha256 *c, uint8_t out[SHA256_DIGEST_BYTES])
 	c->buf[c->n++] = 0x80;
 	if (c->n > 56) {
 		memset(c->buf + c->n, 0, SHA256_BLOCK_BYTES - c->n);
-		sha256_block(c->h, c->buf);
+		sha256_blocks(c->h, c->buf, 1);
 		c->n = 0;
 	}
 	memset(c->buf + c->n, 0, 56 - c->n);
 	for (int i = 0; i < 8; i++)
 		c->buf[56 + i] = (uint8_t)(bits >> (56 - 8 * i));
-	sha256_block(c->h, c->buf);
+	sha256_blocks(c->h, c->buf, 1);
 	for (int i = 0; i < 8; i++) {
 		out[4 * i] = (uint8_t)(c->h[i] >> 24);
 		out[4 * i + 1] = (uint8_t)(c->h[i] >> 16);
@@ -183,4 +278,13 @@ int sha256_ct_equal(const void *a, const void *b, size_t n)
 		d |= x[i] ^ y[i];
 	/* 1 when d == 0, without a data-dependent branch */
 	return (int)(1 & (((uint32_t)d - 1) >> 8));
+}
+
+int sha256_accelerated(void)
+{
+#if SHA256_X86_NI
+	return sha256_use_ni && sha256_have_ni();
+#else
+	return 0;
+#endif
 }

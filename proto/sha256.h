@@ -20,6 +20,13 @@ struct sha256 {
 	size_t n;                        /* bytes in buf */
 };
 
+/* 1 (the default): use the CPU's SHA instructions where it has them (x86
+ * SHA-NI); 0: the portable code only. The digest is the same either way;
+ * tests set it to compare the two. */
+extern int sha256_use_ni;
+/* 1 when this build and CPU hash with SHA instructions (sha256_use_ni set). */
+int sha256_accelerated(void);
+
 void sha256_init(struct sha256 *c);
 void sha256_update(struct sha256 *c, const void *data, size_t n);
 /* Writes the digest and wipes the state (init again to reuse it). */
