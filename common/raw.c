@@ -108,6 +108,31 @@ static int raw_number(const char **pp, const char *end, double *out)
 		neg = *p == '-';
 		p++;
 	}
+	/* the common token first: at most 19 digits in all, with or without a
+	 * fraction, no exponent; m then holds every digit exactly, and the
+	 * general loop below would find the same m and exponent */
+	{
+		const char *q = p;
+		uint64_t v = 0;
+		int nd = 0, frac = 0;
+		while (q < end && raw_is_digit(*q))
+			v = v * 10 + (unsigned)(*q++ - '0'), nd++;
+		if (q < end && *q == '.') {
+			q++;
+			while (q < end && raw_is_digit(*q))
+				v = v * 10 + (unsigned)(*q++ - '0'), frac++;
+		}
+		if (nd + frac > 0 && nd + frac <= 19 && frac <= 22 && v <= (1ull << 53) &&
+		    (q == end || raw_is_blank(*q) || *q == '\n' || *q == '\r')) {
+			double x = (double)v;
+			x = frac ? x / raw_pow10[frac] : x;
+			if (!(x <= LIM_RAW_COORD))
+				return RAW_NUM_RANGE;
+			*out = neg ? -x : x;
+			*pp = q;
+			return RAW_NUM_OK;
+		}
+	}
 	uint64_t m = 0;
 	int nsig = 0, dropped = 0;
 	int64_t ndig = 0, exp10 = 0;
