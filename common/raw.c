@@ -213,6 +213,11 @@ static int raw_number(const char **pp, const char *end, double *out)
 	return RAW_NUM_OK;
 }
 
+/* fmax, inline (libm's is a call even at -O3): the other operand when one
+ * is NaN, else the larger; raw.c calls it on magnitudes only, so no signed
+ * zeros to order */
+static inline double raw_fmax(double x, double y) { return x > y || y != y ? x : y; }
+
 /* ---- welding -------------------------------------------------------------- */
 
 /* One occupied grid cell: its key and the first vertex in it (SCENE_NONE ends). */
@@ -411,7 +416,7 @@ static uint32_t raw_weld_point(struct raw_weld *w, vec3 p)
 
 static vec3 raw_unit_scaled(vec3 a)
 {
-	double m = fmax(fabs(a.x), fmax(fabs(a.y), fabs(a.z)));
+	double m = raw_fmax(fabs(a.x), raw_fmax(fabs(a.y), fabs(a.z)));
 	/* divide (1/m overflows for subnormal m) */
 	return m > 0 ? v3_norm(v3(a.x / m, a.y / m, a.z / m)) : a;
 }
