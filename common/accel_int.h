@@ -79,6 +79,26 @@ struct ginst {
 	uint32_t rec;
 };
 
+/*
+ * LEAF BLOCKS. A leaf of one to ACCEL_MAX_LEAF references that are all
+ * triangles gets, at build time, a block of its triangles' vertices in
+ * float, one triangle per SIMD lane (struct-of-arrays), so that one ray is
+ * tested against the whole leaf in one float pass (the TRIANGLE PRE-TEST,
+ * accel.c) and the packets read the floats without gathering them. The
+ * node's child then has n = count | LEAF_BLOCK and idx = the block's index
+ * in group.tblk; the block holds the leaf's references, so the traversal
+ * never reads group.refs for it. Lanes past the count are zero and never
+ * tested.
+ */
+#define LEAF_BLOCK 0x80000000u
+_Static_assert(ACCEL_MAX_REFS <= LEAF_BLOCK, "leaf sizes leave bvh4.n's flag bit free");
+struct tri_block {
+	float v[9][4];   /* row 3j + k: component k (x, y, z) of vertex j (a, b, c),
+			    each the double rounded to nearest float */
+	float s[4];      /* the largest magnitude of the lane's nine floats */
+	uint32_t ref[4]; /* the leaf's references, in leaf order */
+};
+
 struct group {
 	struct bvh bvh;
 	uint32_t *refs; /* bounded references in leaf order; NULL in a group of
@@ -97,6 +117,8 @@ struct group {
 	struct ginst *inst;
 	uint32_t n_inst;
 	vec3 *bake;     /* baked vertices and normals (owned) */
+	struct tri_block *tblk; /* LEAF BLOCKS (owned), n_tblk of them */
+	uint32_t n_tblk;
 	struct geom_box bounds; /* of the bounded references */
 	const struct geom_obj *plane1; /* the only unbounded reference when it is an
 					  untransformed plane (tested inline), else NULL */
