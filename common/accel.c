@@ -910,23 +910,21 @@ static inline void tri1_init(struct tri1 *q, const struct geom_wray *w)
 
 /* The lanes (bit l) of block tb's first n that the ray may hit: the
  * others it certainly misses (TRIANGLE PRE-TEST). */
-static inline __attribute__((always_inline)) unsigned tri1_pass(const struct tri1 *q, const struct tri_block *tb,
-								uint32_t n)
+static inline __attribute__((always_inline)) unsigned tri1_pass(const struct tri1 *q, const float *tb, uint32_t n)
 {
-	const int rx = q->rx, ry = q->ry, rz = q->rz;
+	const float *x = tb + (uint32_t)q->rx * n, *y = tb + (uint32_t)q->ry * n, *z = tb + (uint32_t)q->rz * n;
+	const uint32_t n3 = 3 * n, n6 = 6 * n;
 #if defined(__SSE2__)
-	const __m128 v[9] = { _mm_loadu_ps(tb->v[rx]),     _mm_loadu_ps(tb->v[ry]),     _mm_loadu_ps(tb->v[rz]),
-			      _mm_loadu_ps(tb->v[3 + rx]), _mm_loadu_ps(tb->v[3 + ry]), _mm_loadu_ps(tb->v[3 + rz]),
-			      _mm_loadu_ps(tb->v[6 + rx]), _mm_loadu_ps(tb->v[6 + ry]), _mm_loadu_ps(tb->v[6 + rz]) };
-	unsigned rej = tri_reject_ps(v, _mm_loadu_ps(tb->s), q->ox, q->oy, q->oz, q->sx, q->sy, q->so);
+	const __m128 v[9] = { _mm_loadu_ps(x),	    _mm_loadu_ps(y),	  _mm_loadu_ps(z),
+			      _mm_loadu_ps(x + n3), _mm_loadu_ps(y + n3), _mm_loadu_ps(z + n3),
+			      _mm_loadu_ps(x + n6), _mm_loadu_ps(y + n6), _mm_loadu_ps(z + n6) };
+	unsigned rej = tri_reject_ps(v, _mm_loadu_ps(blk_row(tb, n, 9)), q->ox, q->oy, q->oz, q->sx, q->sy, q->so);
 	return ~rej & ((1u << n) - 1);
 #else
 	unsigned pass = 0;
 	for (uint32_t l = 0; l < n; l++) {
-		const float v[9] = { tb->v[rx][l],     tb->v[ry][l],     tb->v[rz][l],
-				     tb->v[3 + rx][l], tb->v[3 + ry][l], tb->v[3 + rz][l],
-				     tb->v[6 + rx][l], tb->v[6 + ry][l], tb->v[6 + rz][l] };
-		pass |= (unsigned)!tri_reject_f(v, tb->s[l], q->ox, q->oy, q->oz, q->sx, q->sy, q->so) << l;
+		const float v[9] = { x[l], y[l], z[l], x[n3 + l], y[n3 + l], z[n3 + l], x[n6 + l], y[n6 + l], z[n6 + l] };
+		pass |= (unsigned)!tri_reject_f(v, blk_row(tb, n, 9)[l], q->ox, q->oy, q->oz, q->sx, q->sy, q->so) << l;
 	}
 	return pass;
 #endif
@@ -935,7 +933,7 @@ static inline __attribute__((always_inline)) unsigned tri1_pass(const struct tri
 /* The closest hit among block tb's n triangles (ref_test's contract): the
  * pre-test, then the double test on the lanes it lets through. *q is set
  * up from r on the first block the ray meets (*q_ready). */
-static inline __attribute__((always_inline)) bool block_hit(const struct group *g, const struct tri_block *tb,
+static inline __attribute__((always_inline)) bool block_hit(const struct group *g, const float *tb,
 							     uint32_t n, struct trace *r, struct cand *best,
 							     struct tri1 *q, bool *q_ready)
 {
@@ -945,14 +943,14 @@ static inline __attribute__((always_inline)) bool block_hit(const struct group *
 	}
 	bool found = false;
 	for (unsigned pass = tri1_pass(q, tb, n); pass; pass &= pass - 1)
-		found |= tri_test(g, tb->ref[__builtin_ctz(pass)], r, best);
+		found |= tri_test(g, blk_ref(tb, n, (uint32_t)__builtin_ctz(pass)), r, best);
 	return found;
 }
 
 /* Any hit among block tb's n triangles: the blocking reference, or
  * ACCEL_NO_HINT. As block_hit. */
 static inline __attribute__((always_inline)) uint32_t block_occluded(const struct group *g,
-								      const struct tri_block *tb, uint32_t n,
+								      const float *tb, uint32_t n,
 								      struct trace *r, struct tri1 *q, bool *q_ready)
 {
 	if (!*q_ready) {
@@ -960,7 +958,7 @@ static inline __attribute__((always_inline)) uint32_t block_occluded(const struc
 		*q_ready = true;
 	}
 	for (unsigned pass = tri1_pass(q, tb, n); pass; pass &= pass - 1) {
-		uint32_t ref = tb->ref[__builtin_ctz(pass)];
+		uint32_t ref = blk_ref(tb, n, (uint32_t)__builtin_ctz(pass));
 		if (tri_occludes(g, ref, r))
 			return ref;
 	}
@@ -1318,13 +1316,15 @@ static void tri4_init(struct tri4 *q, struct trace tr[4])
  * misses (TRIANGLE PRE-TEST); q->ok must hold. The block's floats are the
  * vertices rounded as the packets once rounded them when they gathered
  * them, and its s the same largest magnitude. */
-static inline unsigned tri4_reject(const struct tri4 *q, const struct tri_block *tb, uint32_t l)
+static inline unsigned tri4_reject(const struct tri4 *q, const float *tb, uint32_t n, uint32_t l)
 {
-	const int kx = q->kx, ky = q->ky, kz = q->kz;
-	const __m128 v[9] = { _mm_set1_ps(tb->v[kx][l]),     _mm_set1_ps(tb->v[ky][l]),     _mm_set1_ps(tb->v[kz][l]),
-			      _mm_set1_ps(tb->v[3 + kx][l]), _mm_set1_ps(tb->v[3 + ky][l]), _mm_set1_ps(tb->v[3 + kz][l]),
-			      _mm_set1_ps(tb->v[6 + kx][l]), _mm_set1_ps(tb->v[6 + ky][l]), _mm_set1_ps(tb->v[6 + kz][l]) };
-	return tri_reject_ps(v, _mm_set1_ps(tb->s[l]), q->ox, q->oy, q->oz, q->sx, q->sy, q->so);
+	const float *x = tb + (uint32_t)q->kx * n + l, *y = tb + (uint32_t)q->ky * n + l,
+		    *z = tb + (uint32_t)q->kz * n + l;
+	const uint32_t n3 = 3 * n, n6 = 6 * n;
+	const __m128 v[9] = { _mm_set1_ps(x[0]),  _mm_set1_ps(y[0]),  _mm_set1_ps(z[0]),
+			      _mm_set1_ps(x[n3]), _mm_set1_ps(y[n3]), _mm_set1_ps(z[n3]),
+			      _mm_set1_ps(x[n6]), _mm_set1_ps(y[n6]), _mm_set1_ps(z[n6]) };
+	return tri_reject_ps(v, _mm_set1_ps(blk_row(tb, n, 9)[l]), q->ox, q->oy, q->oz, q->sx, q->sy, q->so);
 }
 
 /* The same for a triangle of a leaf without a block (mixed leaves): its
@@ -1377,7 +1377,7 @@ static inline __attribute__((always_inline)) void leaf4(const struct accel *A, c
  * the rays in lanes (two or more) reads the block. */
 static inline __attribute__((always_inline)) void leaf4_block(const struct group *g, struct trace tr[4],
 							      struct cand best[4], bool found[4],
-							      const struct tri_block *tb, uint32_t n, unsigned lanes,
+							      const float *tb, uint32_t n, unsigned lanes,
 							      struct tri4 *q, bool *q_ready)
 {
 	if (!*q_ready) {
@@ -1387,10 +1387,10 @@ static inline __attribute__((always_inline)) void leaf4_block(const struct group
 	for (uint32_t l = 0; l < n; l++) {
 		unsigned test = lanes;
 		if (q->ok)
-			test &= ~tri4_reject(q, tb, l);
+			test &= ~tri4_reject(q, tb, n, l);
 		for (; test; test &= test - 1) {
 			int i = __builtin_ctz(test);
-			found[i] |= tri_test(g, tb->ref[l], &tr[i], &best[i]);
+			found[i] |= tri_test(g, blk_ref(tb, n, l), &tr[i], &best[i]);
 		}
 	}
 }
@@ -1434,7 +1434,7 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 			/* the rays that meet the leaf, in front of their closest hit */
 			unsigned lanes = lanes_in_front(tcur, tmax4, inf4);
 			if (n & LEAF_BLOCK) {
-				const struct tri_block *tb = &g->tblk[idx];
+				const float *tb = &g->tblk[idx];
 				uint32_t nt = n & ~LEAF_BLOCK;
 				if (lanes & (lanes - 1)) {
 					leaf4_block(g, tr, best, found, tb, nt, lanes, &q, &q_ready);
@@ -1608,17 +1608,18 @@ static inline __attribute__((always_inline)) void bvh_occluded4(const struct acc
 	unsigned act = *active, lanes = act;
 	uint32_t idx = 0, n = 0;
 	uint32_t polls = ACCEL_POLL_POPS;
-	struct tri1 q1[4]; /* each ray's TRIANGLE PRE-TEST, set up at its first block */
-	bool q1_ready[4] = { false, false, false, false };
 	for (;;) {
-		if (n & LEAF_BLOCK) {
-			const struct tri_block *tb = &g->tblk[idx];
-			for (unsigned l = lanes & act; l; l &= l - 1) {
-				int i = __builtin_ctz(l);
-				uint32_t ref = block_occluded(g, tb, n & ~LEAF_BLOCK, &tr[i], &q1[i], &q1_ready[i]);
-				if (ref != ACCEL_NO_HINT) {
-					act &= ~(1u << i);
-					*hint = ref;
+		if (n & LEAF_BLOCK) { /* the block's references; no pre-test (it did not pay here) */
+			const float *tb = &g->tblk[idx];
+			uint32_t nt = n & ~LEAF_BLOCK;
+			for (uint32_t k = 0; k < nt && (lanes &= act); k++) {
+				uint32_t ref = blk_ref(tb, nt, k);
+				for (unsigned l = lanes; l; l &= l - 1) {
+					int i = __builtin_ctz(l);
+					if (tri_occludes(g, ref, &tr[i])) {
+						act &= ~(1u << i);
+						*hint = ref;
+					}
 				}
 			}
 			if (!act)

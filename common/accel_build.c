@@ -334,21 +334,22 @@ static bool tri_leaf(const struct group *g, const struct bvh4 *nd, int c)
  */
 static int make_blocks(struct group *g)
 {
-	uint32_t nb = 0;
+	uint64_t words = 0;
 	for (uint32_t k = 0; k < g->bvh.n_nodes4; k++) {
 		if (cancel_poll_every(k))
 			return ACCEL_CANCELLED;
 		for (int c = 0; c < 4; c++)
-			nb += tri_leaf(g, &g->bvh.nodes[k], c);
+			if (tri_leaf(g, &g->bvh.nodes[k], c))
+				words += BLK_ROWS * (uint64_t)g->bvh.nodes[k].n[c];
 	}
-	if (!nb)
-		return 0;
-	g->tblk = calloc(nb, sizeof *g->tblk);
+	if (!words || words + BLK_PAD > UINT32_MAX)
+		return 0; /* no blocks: the leaves as they are (the same hits) */
+	g->tblk = calloc(words + BLK_PAD, sizeof *g->tblk);
 	if (!g->tblk)
 		return -1;
-	g->n_tblk = nb;
-	g->bytes += (size_t)nb * sizeof *g->tblk;
-	uint32_t b = 0;
+	g->n_tblk = (uint32_t)(words + BLK_PAD);
+	g->bytes += (size_t)g->n_tblk * sizeof *g->tblk;
+	uint32_t at = 0;
 	for (uint32_t k = 0; k < g->bvh.n_nodes4; k++) {
 		if (cancel_poll_every(k))
 			return ACCEL_CANCELLED;
@@ -356,26 +357,28 @@ static int make_blocks(struct group *g)
 		for (int c = 0; c < 4; c++) {
 			if (!tri_leaf(g, nd, c))
 				continue;
-			struct tri_block *tb = &g->tblk[b];
-			for (uint32_t l = 0; l < nd->n[c]; l++) {
+			uint32_t n = nd->n[c];
+			float *b = &g->tblk[at];
+			for (uint32_t l = 0; l < n; l++) {
 				uint32_t ref = g->refs[nd->idx[c] + l];
 				const struct gtri *t = &g->tri[REF_IDX(ref)];
 				const struct gmesh *m = &g->mesh[t->mesh];
 				const uint32_t *ix = tri_ix(m, t->tri);
 				float sv = 0;
-				for (int j = 0; j < 3; j++)
-					for (int q = 0; q < 3; q++) {
-						float f = (float)geom_comp(&m->v[ix[j]], q);
-						tb->v[3 * j + q][l] = f;
-						/* as tri4_reject's sv: a NaN is left out (it
-						 * makes every comparison false anyway) */
+				for (uint32_t j = 0; j < 3; j++)
+					for (uint32_t q = 0; q < 3; q++) {
+						float f = (float)geom_comp(&m->v[ix[j]], (int)q);
+						b[(3 * j + q) * n + l] = f;
+						/* as tri4_init's and the packets' once: a NaN is
+						 * left out (it makes every comparison false) */
 						sv = fabsf(f) > sv ? fabsf(f) : sv;
 					}
-				tb->s[l] = sv;
-				tb->ref[l] = ref;
+				b[9 * n + l] = sv;
+				memcpy(&b[10 * n + l], &ref, sizeof ref);
 			}
 			nd->n[c] |= LEAF_BLOCK;
-			nd->idx[c] = b++;
+			nd->idx[c] = at;
+			at += BLK_ROWS * n;
 		}
 	}
 	return 0;
