@@ -37,6 +37,10 @@
  * materials with a shader; inside instances they are completed at once.
  * The traversal loop exists once per ray octant (bvh_hit's oct), so the
  * node test reads each axis' near and far planes at constant offsets.
+ * Leaves of one to four triangles keep their vertices in float as well
+ * (LEAF BLOCKS, accel_int.h): a conservative float pre-test of the ray
+ * against the whole leaf (TRIANGLE PRE-TEST) picks the triangles the
+ * double test then decides.
  *
  * Rays are never normalised when they change space, so t is the same in
  * every space and a hit's t is the caller's t.

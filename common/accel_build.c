@@ -329,8 +329,10 @@ static bool tri_leaf(const struct group *g, const struct bvh4 *nd, int c)
 /*
  * LEAF BLOCKS (accel_int.h): every leaf of g's tree that is one to
  * ACCEL_MAX_LEAF triangles gets its block, and its node child the
- * block's index and the LEAF_BLOCK flag. Returns 0, -1 when out of memory,
- * or ACCEL_CANCELLED.
+ * block's offset in g->tblk and the LEAF_BLOCK flag. A group whose blocks
+ * would not fit 32-bit offsets gets none (its leaves are tested as
+ * before, with the same hits). Returns 0, -1 when out of memory, or
+ * ACCEL_CANCELLED.
  */
 static int make_blocks(struct group *g)
 {
