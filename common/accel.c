@@ -888,7 +888,7 @@ static inline bool tri_reject_f(const float v[9], float sv, float ox, float oy, 
 
 /* One ray's side of the pre-test against leaf blocks. */
 struct tri1 {
-	int rx, ry, rz; /* the block rows of component kx, ky, kz of vertex a */
+	int rx, ry, rz; /* kx, ky, kz: vertex a's rows in a block (times its width) */
 #if defined(__SSE2__)
 	__m128 ox, oy, oz, sx, sy, so; /* broadcast to the four lanes */
 #else
@@ -919,7 +919,7 @@ static inline __attribute__((always_inline)) unsigned tri1_pass(const struct tri
 	const float *x = tb + (uint32_t)q->rx * n, *y = tb + (uint32_t)q->ry * n, *z = tb + (uint32_t)q->rz * n;
 	const uint32_t n3 = 3 * n, n6 = 6 * n;
 #if defined(__SSE2__)
-	const __m128 v[9] = { _mm_loadu_ps(x),	    _mm_loadu_ps(y),	  _mm_loadu_ps(z),
+	const __m128 v[9] = { _mm_loadu_ps(x),      _mm_loadu_ps(y),      _mm_loadu_ps(z),
 			      _mm_loadu_ps(x + n3), _mm_loadu_ps(y + n3), _mm_loadu_ps(z + n3),
 			      _mm_loadu_ps(x + n6), _mm_loadu_ps(y + n6), _mm_loadu_ps(z + n6) };
 	unsigned rej = tri_reject_ps(v, _mm_loadu_ps(blk_row(tb, n, 9)), q->ox, q->oy, q->oz, q->sx, q->sy, q->so);
