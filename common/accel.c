@@ -37,6 +37,10 @@
  * materials with a shader; inside instances they are completed at once.
  * The traversal loop exists once per ray octant (bvh_hit's oct), so the
  * node test reads each axis' near and far planes at constant offsets.
+ * Leaves of one to four triangles keep their vertices in float as well
+ * (LEAF BLOCKS, accel_int.h): a conservative float pre-test of the ray
+ * against the whole leaf (TRIANGLE PRE-TEST) picks the triangles the
+ * double test then decides.
  *
  * Rays are never normalised when they change space, so t is the same in
  * every space and a hit's t is the caller's t.
@@ -483,6 +487,35 @@ static __attribute__((noinline)) bool ref_test_slow(const struct accel *A, const
 	return true;
 }
 
+/* ref_test of triangle reference ref. */
+static inline __attribute__((always_inline)) bool tri_test(const struct group *g, uint32_t ref, struct trace *r,
+							    struct cand *c)
+{
+	const struct gtri *gt = &g->tri[REF_IDX(ref)];
+	const struct gmesh *m = &g->mesh[gt->mesh];
+	const uint32_t *ix = tri_ix(m, gt->tri);
+	double t, b1, b2;
+	if (!geom_tri_hit_p(trace_wray(r), &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2) ||
+	    !cand_better(c, ref, t))
+		return false;
+	c->b1 = b1;
+	c->b2 = b2;
+	cand_take(c, r, ref, t);
+	return true;
+}
+
+/* ref_occludes of triangle reference ref. */
+static inline __attribute__((always_inline)) bool tri_occludes(const struct group *g, uint32_t ref,
+								struct trace *r)
+{
+	const struct gtri *gt = &g->tri[REF_IDX(ref)];
+	const struct gmesh *m = &g->mesh[gt->mesh];
+	const uint32_t *ix = tri_ix(m, gt->tri);
+	double t, b1, b2;
+	return geom_tri_hit_p(trace_wray(r), &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &t, &b1,
+			      &b2);
+}
+
 /* Tests one reference; on a hit in (r->tmin, r->tmax) that beats *c
  * (CANONICAL TIES) records it in *c and narrows r->tmax. */
 static inline __attribute__((always_inline)) bool ref_test(const struct accel *A, const struct group *g,
@@ -495,18 +528,8 @@ static inline __attribute__((always_inline)) bool ref_test(const struct accel *A
 		if (!sphere_test(&g->sph[i], r, &t) || !cand_better(c, ref, t))
 			return false;
 		break;
-	case REF_TRI: {
-		const struct gmesh *m = &g->mesh[g->tri[i].mesh];
-		const uint32_t *ix = tri_ix(m, g->tri[i].tri);
-		double b1, b2;
-		if (!geom_tri_hit_p(trace_wray(r), &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &t, &b1,
-				    &b2) ||
-		    !cand_better(c, ref, t))
-			return false;
-		c->b1 = b1;
-		c->b2 = b2;
-		break;
-	}
+	case REF_TRI:
+		return tri_test(g, ref, r, c);
 	case REF_XPRIM: {
 		const struct geom_obj *go = g->xp[i].g;
 		if (go->kind != PRIM_CSG)
@@ -528,13 +551,8 @@ static inline bool ref_occludes(const struct accel *A, const struct group *g, ui
 	switch (REF_KIND(ref)) { /* the common kinds without a candidate */
 	case REF_SPHERE:
 		return sphere_test(&g->sph[i], r, &t);
-	case REF_TRI: {
-		const struct gmesh *m = &g->mesh[g->tri[i].mesh];
-		const uint32_t *ix = tri_ix(m, g->tri[i].tri);
-		double b1, b2;
-		return geom_tri_hit_p(trace_wray(r), &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &t,
-				      &b1, &b2);
-	}
+	case REF_TRI:
+		return tri_occludes(g, ref, r);
 	case REF_INST:
 		return inst_occluded(A, &g->inst[i], r);
 	default: { /* an xprim: xprim_test's answer without a candidate, but CSG */
@@ -761,6 +779,196 @@ static __attribute__((noinline)) bool brute_hit(const struct accel *A, const str
 	return found;
 }
 
+/* ---- the triangle pre-test and leaf blocks ------------------------------------------ */
+
+/*
+ * TRIANGLE PRE-TEST IN FLOAT. A ray and a triangle are first tested in
+ * float: the same edge functions U, V, W as geom_tri_hit_p, from the
+ * vertices and the ray's origin rounded to float. The ray is rejected only
+ * where two of them have opposite signs by more than a margin that bounds
+ * the float result's distance from the double one; the double test then
+ * rejects too (its first test), so everything not rejected is tested in
+ * double exactly as before and the hits stay bit for bit. The margin: with
+ * S the largest magnitude of the nine vertex components and the ray's
+ * origin (permuted), each of A, B, C minus the origin is within E1 =
+ * 2^-21 S of its double value (the roundings to float and the subtraction:
+ * 4 u S, u = 2^-24), the sheared a, b, c (|sx|, |sy| <= 1: kz is the
+ * dominant axis) within E2 = 2^-19 S (24 u S), and U = cx by - cy bx within
+ * E2 (|bx| + |by| + |cx| + |cy|) + 2 E2^2 + 2u (|cx by| + |cy bx|); the
+ * margin is twice that (the margin's own rounding and the double's, ~2^-52
+ * relative) plus 2^-120 and floors of 2^-140 in E1 and E2 for subnormal
+ * floats. One margin M serves U, V and W: with s the largest of |ax| + |ay|,
+ * |bx| + |by| and |cx| + |cy|, each edge's two sums add to at most 2s and
+ * its two products' magnitudes to at most s^2, so M = 2 [2 E2 s + 2 E2^2 +
+ * 2u s^2] + 2^-120 bounds all three (a wider margin only lets more
+ * through), and the test is min(U, V, W) < -M and max(U, V, W) > M. An
+ * infinite S makes M infinite or NaN, and a NaN among U, V, W drops out of
+ * min and max or makes them NaN: neither can make a rejection that two
+ * finite edge functions of opposite signs beyond M would not make, and
+ * then the double ones have opposite signs too. Each lane is one ray and
+ * one triangle, with its own S, so the
+ * same bound holds for both uses of the four lanes:
+ *   - one ray against a leaf block's up to four triangles (LEAF BLOCKS,
+ *     accel_int.h): single rays, closest and any hit, and the packets'
+ *     leaves met by one ray or traced for any hit;
+ *   - one triangle against a packet's four rays (tri4_reject).
+ * The floats are the same either way: a block holds each vertex component
+ * rounded to nearest and the lane's largest magnitude, computed at build
+ * time as the packets computed them when they gathered the vertices. The
+ * scalar path (no SSE2) makes the same operations, lane by lane, in float
+ * (a wider evaluation only makes each error smaller).
+ */
+#if defined(__SSE2__)
+static inline __m128 abs4(__m128 x) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), x); }
+
+/* The lanes (bit l) whose ray certainly misses its triangle: v[3j + k] is
+ * component k of vertex j, permuted (kx, ky, kz), sv the largest magnitude
+ * of the nine, o* and s* the ray's origin (permuted) and shear, so the
+ * largest magnitude of its origin, all in float. */
+static inline __attribute__((always_inline)) unsigned tri_reject_ps(const __m128 v[9], __m128 sv, __m128 ox,
+								    __m128 oy, __m128 oz, __m128 sx, __m128 sy,
+								    __m128 so)
+{
+	__m128 S = _mm_max_ps(so, sv);
+	__m128 Az = _mm_sub_ps(v[2], oz), Bz = _mm_sub_ps(v[5], oz), Cz = _mm_sub_ps(v[8], oz);
+	__m128 ax = _mm_sub_ps(_mm_sub_ps(v[0], ox), _mm_mul_ps(sx, Az));
+	__m128 ay = _mm_sub_ps(_mm_sub_ps(v[1], oy), _mm_mul_ps(sy, Az));
+	__m128 bx = _mm_sub_ps(_mm_sub_ps(v[3], ox), _mm_mul_ps(sx, Bz));
+	__m128 by = _mm_sub_ps(_mm_sub_ps(v[4], oy), _mm_mul_ps(sy, Bz));
+	__m128 cx = _mm_sub_ps(_mm_sub_ps(v[6], ox), _mm_mul_ps(sx, Cz));
+	__m128 cy = _mm_sub_ps(_mm_sub_ps(v[7], oy), _mm_mul_ps(sy, Cz));
+	__m128 p1 = _mm_mul_ps(cx, by), p2 = _mm_mul_ps(cy, bx); /* U */
+	__m128 p3 = _mm_mul_ps(ax, cy), p4 = _mm_mul_ps(ay, cx); /* V */
+	__m128 p5 = _mm_mul_ps(bx, ay), p6 = _mm_mul_ps(by, ax); /* W */
+	__m128 U = _mm_sub_ps(p1, p2), V = _mm_sub_ps(p3, p4), W = _mm_sub_ps(p5, p6);
+	__m128 E2 = _mm_add_ps(_mm_mul_ps(S, _mm_set1_ps(0x1p-19f)), _mm_set1_ps(0x1p-140f));
+	__m128 two_e2 = _mm_add_ps(E2, E2), two_e2sq = _mm_mul_ps(two_e2, E2);
+	__m128 Aab = _mm_add_ps(abs4(ax), abs4(ay)), Bab = _mm_add_ps(abs4(bx), abs4(by)),
+	       Cab = _mm_add_ps(abs4(cx), abs4(cy));
+	/* one margin for U, V and W: with s the largest of the three sums,
+	 * s1 + s2 <= 2 s and |p| + |q| <= s1 s2 <= s^2, so
+	 * 2 [2 E2 s + 2 E2^2 + 2u s^2] + 2^-120 bounds each edge's margin */
+	__m128 sm = _mm_max_ps(_mm_max_ps(Aab, Bab), Cab);
+	__m128 M = _mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(two_e2, sm), two_e2sq),
+						    _mm_mul_ps(_mm_set1_ps(0x1p-23f), _mm_mul_ps(sm, sm))),
+					 _mm_set1_ps(2.0f)),
+			      _mm_set1_ps(0x1p-120f));
+	/* opposite signs beyond the margin; a NaN drops out of min and max
+	 * (the second operand is returned), so it never makes a rejection */
+	__m128 lo = _mm_min_ps(_mm_min_ps(U, V), W), hi = _mm_max_ps(_mm_max_ps(U, V), W);
+	__m128 neg = _mm_cmplt_ps(lo, _mm_sub_ps(_mm_setzero_ps(), M)), pos = _mm_cmpgt_ps(hi, M);
+	return (unsigned)_mm_movemask_ps(_mm_and_ps(neg, pos));
+}
+#else
+/* tri_reject_ps for one lane, operation for operation (max(a, b) is
+ * a > b ? a : b, as SSE's). */
+static inline bool tri_reject_f(const float v[9], float sv, float ox, float oy, float oz, float sx, float sy,
+				float so)
+{
+	float S = so > sv ? so : sv;
+	float Az = v[2] - oz, Bz = v[5] - oz, Cz = v[8] - oz;
+	float ax = (v[0] - ox) - sx * Az, ay = (v[1] - oy) - sy * Az;
+	float bx = (v[3] - ox) - sx * Bz, by = (v[4] - oy) - sy * Bz;
+	float cx = (v[6] - ox) - sx * Cz, cy = (v[7] - oy) - sy * Cz;
+	float p1 = cx * by, p2 = cy * bx, p3 = ax * cy, p4 = ay * cx, p5 = bx * ay, p6 = by * ax;
+	float U = p1 - p2, V = p3 - p4, W = p5 - p6;
+	float E2 = S * 0x1p-19f + 0x1p-140f;
+	float two_e2 = E2 + E2, two_e2sq = two_e2 * E2;
+	float Aab = fabsf(ax) + fabsf(ay), Bab = fabsf(bx) + fabsf(by), Cab = fabsf(cx) + fabsf(cy);
+	float sm = Aab > Bab ? Aab : Bab;
+	sm = sm > Cab ? sm : Cab;
+	float M = ((two_e2 * sm + two_e2sq) + 0x1p-23f * (sm * sm)) * 2.0f + 0x1p-120f;
+	float lo = U < V ? U : V, hi = U > V ? U : V; /* minps and maxps */
+	lo = lo < W ? lo : W;
+	hi = hi > W ? hi : W;
+	bool neg = lo < 0.0f - M, pos = hi > M;
+	return neg && pos;
+}
+#endif
+
+/* One ray's side of the pre-test against leaf blocks. */
+struct tri1 {
+	int rx, ry, rz; /* kx, ky, kz: vertex a's rows in a block (times its width) */
+#if defined(__SSE2__)
+	__m128 ox, oy, oz, sx, sy, so; /* broadcast to the four lanes */
+#else
+	float ox, oy, oz, sx, sy, so;
+#endif
+};
+
+/* From the ray's watertight set-up w (geom_wray_init's). */
+static inline void tri1_init(struct tri1 *q, const struct geom_wray *w)
+{
+	float ox = (float)w->ox, oy = (float)w->oy, oz = (float)w->oz;
+	float m = fabsf(ox) > fabsf(oy) ? fabsf(ox) : fabsf(oy);
+	float so = m > fabsf(oz) ? m : fabsf(oz);
+	q->rx = w->kx, q->ry = w->ky, q->rz = w->kz;
+#if defined(__SSE2__)
+	q->ox = _mm_set1_ps(ox), q->oy = _mm_set1_ps(oy), q->oz = _mm_set1_ps(oz);
+	q->sx = _mm_set1_ps((float)w->sx), q->sy = _mm_set1_ps((float)w->sy), q->so = _mm_set1_ps(so);
+#else
+	q->ox = ox, q->oy = oy, q->oz = oz;
+	q->sx = (float)w->sx, q->sy = (float)w->sy, q->so = so;
+#endif
+}
+
+/* The lanes (bit l) of block tb's first n that the ray may hit: the
+ * others it certainly misses (TRIANGLE PRE-TEST). */
+static inline __attribute__((always_inline)) unsigned tri1_pass(const struct tri1 *q, const float *tb, uint32_t n)
+{
+	const float *x = tb + (uint32_t)q->rx * n, *y = tb + (uint32_t)q->ry * n, *z = tb + (uint32_t)q->rz * n;
+	const uint32_t n3 = 3 * n, n6 = 6 * n;
+#if defined(__SSE2__)
+	const __m128 v[9] = { _mm_loadu_ps(x),      _mm_loadu_ps(y),      _mm_loadu_ps(z),
+			      _mm_loadu_ps(x + n3), _mm_loadu_ps(y + n3), _mm_loadu_ps(z + n3),
+			      _mm_loadu_ps(x + n6), _mm_loadu_ps(y + n6), _mm_loadu_ps(z + n6) };
+	unsigned rej = tri_reject_ps(v, _mm_loadu_ps(blk_row(tb, n, 9)), q->ox, q->oy, q->oz, q->sx, q->sy, q->so);
+	return ~rej & ((1u << n) - 1);
+#else
+	unsigned pass = 0;
+	for (uint32_t l = 0; l < n; l++) {
+		const float v[9] = { x[l], y[l], z[l], x[n3 + l], y[n3 + l], z[n3 + l], x[n6 + l], y[n6 + l], z[n6 + l] };
+		pass |= (unsigned)!tri_reject_f(v, blk_row(tb, n, 9)[l], q->ox, q->oy, q->oz, q->sx, q->sy, q->so) << l;
+	}
+	return pass;
+#endif
+}
+
+/* The closest hit among block tb's n triangles (ref_test's contract): the
+ * pre-test, then the double test on the lanes it lets through. *q is set
+ * up from r on the first block the ray meets (*q_ready). */
+static inline __attribute__((always_inline)) bool block_hit(const struct group *g, const float *tb,
+							     uint32_t n, struct trace *r, struct cand *best,
+							     struct tri1 *q, bool *q_ready)
+{
+	if (!*q_ready) {
+		tri1_init(q, trace_wray(r));
+		*q_ready = true;
+	}
+	bool found = false;
+	for (unsigned pass = tri1_pass(q, tb, n); pass; pass &= pass - 1)
+		found |= tri_test(g, blk_ref(tb, n, (uint32_t)__builtin_ctz(pass)), r, best);
+	return found;
+}
+
+/* Any hit among block tb's n triangles: the blocking reference, or
+ * ACCEL_NO_HINT. As block_hit. */
+static inline __attribute__((always_inline)) uint32_t block_occluded(const struct group *g,
+								      const float *tb, uint32_t n,
+								      struct trace *r, struct tri1 *q, bool *q_ready)
+{
+	if (!*q_ready) {
+		tri1_init(q, trace_wray(r));
+		*q_ready = true;
+	}
+	for (unsigned pass = tri1_pass(q, tb, n); pass; pass &= pass - 1) {
+		uint32_t ref = blk_ref(tb, n, (uint32_t)__builtin_ctz(pass));
+		if (tri_occludes(g, ref, r))
+			return ref;
+	}
+	return ACCEL_NO_HINT;
+}
+
 /* The BVH traversal of g's bounded references: nearest child first,
  * subtrees behind the closest hit so far popped and dropped. Same contract
  * as ref_test. chunked: g has big leaves (group.big_leaf), tested
@@ -783,16 +991,22 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 	int sp = 0;
 	uint32_t idx = 0, n = 0;
 	uint32_t polls = ACCEL_POLL_POPS;
+	struct tri1 q1; /* TRIANGLE PRE-TEST, set up at the first block */
+	bool q1_ready = false;
 	for (;;) {
 		if (n) {
-			if (chunked && n > ACCEL_LEAF_CHUNK) { /* CANCELLATION: the rest later */
-				stack[sp].idx = idx + ACCEL_LEAF_CHUNK;
-				stack[sp].n = n - ACCEL_LEAF_CHUNK;
-				stack[sp++].t = 0;
-				n = ACCEL_LEAF_CHUNK;
+			if (n & LEAF_BLOCK) {
+				found |= block_hit(g, &g->tblk[idx], n & ~LEAF_BLOCK, r, best, &q1, &q1_ready);
+			} else {
+				if (chunked && n > ACCEL_LEAF_CHUNK) { /* CANCELLATION: the rest later */
+					stack[sp].idx = idx + ACCEL_LEAF_CHUNK;
+					stack[sp].n = n - ACCEL_LEAF_CHUNK;
+					stack[sp++].t = 0;
+					n = ACCEL_LEAF_CHUNK;
+				}
+				for (uint32_t k = 0; k < n; k++)
+					found |= ref_test(A, g, group_ref(g, idx + k), r, best, false);
 			}
-			for (uint32_t k = 0; k < n; k++)
-				found |= ref_test(A, g, group_ref(g, idx + k), r, best, false);
 			tmax = box_tmax(r->tmax * q.tscale);
 			tmax4 = tspan_of(tmax);
 		} else {
@@ -955,8 +1169,16 @@ static inline __attribute__((always_inline)) bool group_occluded_t(const struct 
 	int sp = 0;
 	uint32_t idx = 0, n = 0;
 	uint32_t polls = ACCEL_POLL_POPS;
+	struct tri1 q1; /* TRIANGLE PRE-TEST, set up at the first block */
+	bool q1_ready = false;
 	for (;;) {
-		if (n) {
+		if (n & LEAF_BLOCK) {
+			uint32_t ref = block_occluded(g, &g->tblk[idx], n & ~LEAF_BLOCK, r, &q1, &q1_ready);
+			if (ref != ACCEL_NO_HINT) {
+				*who = ref;
+				return true;
+			}
+		} else if (n) {
 			if (chunked && n > ACCEL_LEAF_CHUNK) { /* CANCELLATION, as bvh_hit */
 				stack[sp].idx = idx + ACCEL_LEAF_CHUNK;
 				stack[sp++].n = n - ACCEL_LEAF_CHUNK;
@@ -1067,26 +1289,8 @@ static inline float lanes_min(__m128 v)
 	return _mm_cvtss_f32(v);
 }
 
-/*
- * TRIANGLE PRE-TEST ACROSS THE PACKET. Where the four rays share the
- * watertight test's axis permutation (kx, ky, kz: neighbouring rays do),
- * a leaf's triangle is first tested against the four at once in float:
- * the same edge functions U, V, W as geom_tri_hit_p, from the vertices and
- * origins rounded to float. A ray is rejected only where two of them have
- * opposite signs by more than a margin that bounds the float result's
- * distance from the double one; the double test then rejects too (its
- * first test), so every ray not rejected is tested in double exactly as
- * before and the hits stay bit for bit. The margin: with S the largest
- * magnitude of the nine vertex components and the ray's origin (permuted),
- * each of A, B, C minus the origin is within E1 = 2^-21 S of its double
- * value (the roundings to float and the subtraction: 4 u S, u = 2^-24), the
- * sheared a, b, c (|sx|, |sy| <= 1: kz is the dominant axis) within E2 =
- * 2^-19 S (24 u S), and U = cx by - cy bx within E2 (|bx| + |by| + |cx| +
- * |cy|) + 2 E2^2 + 2u (|cx by| + |cy bx|); the margin is twice that (the
- * margin's own rounding and the double's, ~2^-52 relative) plus 2^-120 and
- * floors of 2^-140 in E1 and E2 for subnormal floats. An infinite or NaN
- * value anywhere makes a comparison false: no rejection.
- */
+/* The packet's side of the TRIANGLE PRE-TEST: one triangle against the
+ * four rays, where they share kx, ky, kz (neighbouring rays do). */
 struct tri4 {
 	bool ok;   /* set up, and the four rays share kx, ky, kz */
 	int kx, ky, kz;
@@ -1112,50 +1316,36 @@ static void tri4_init(struct tri4 *q, struct trace tr[4])
 	q->sx = _mm_loadu_ps(sx), q->sy = _mm_loadu_ps(sy), q->so = _mm_loadu_ps(so);
 }
 
-static inline __m128 abs4(__m128 x) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), x); }
+/* The rays (bit i: ray i) that lane l's triangle of block tb certainly
+ * misses (TRIANGLE PRE-TEST); q->ok must hold. The block's floats are the
+ * vertices rounded as the packets once rounded them when they gathered
+ * them, and its s the same largest magnitude. */
+static inline unsigned tri4_reject(const struct tri4 *q, const float *tb, uint32_t n, uint32_t l)
+{
+	const float *x = tb + (uint32_t)q->kx * n + l, *y = tb + (uint32_t)q->ky * n + l,
+		    *z = tb + (uint32_t)q->kz * n + l;
+	const uint32_t n3 = 3 * n, n6 = 6 * n;
+	const __m128 v[9] = { _mm_set1_ps(x[0]),  _mm_set1_ps(y[0]),  _mm_set1_ps(z[0]),
+			      _mm_set1_ps(x[n3]), _mm_set1_ps(y[n3]), _mm_set1_ps(z[n3]),
+			      _mm_set1_ps(x[n6]), _mm_set1_ps(y[n6]), _mm_set1_ps(z[n6]) };
+	return tri_reject_ps(v, _mm_set1_ps(blk_row(tb, n, 9)[l]), q->ox, q->oy, q->oz, q->sx, q->sy, q->so);
+}
 
-/* The rays (bit i: ray i) that triangle abc certainly misses (TRIANGLE
- * PRE-TEST); q->ok must hold. */
-static inline unsigned tri4_reject(const struct tri4 *q, const vec3 *a, const vec3 *b, const vec3 *c)
+/* The same for a triangle of a leaf without a block (mixed leaves): its
+ * floats gathered and rounded here, as make_blocks rounds them. */
+static inline unsigned tri4_reject_v(const struct tri4 *q, const vec3 *a, const vec3 *b, const vec3 *c)
 {
 	const int kx = q->kx, ky = q->ky, kz = q->kz;
-	float v[9] = { (float)geom_comp(a, kx), (float)geom_comp(a, ky), (float)geom_comp(a, kz),
+	float f[9] = { (float)geom_comp(a, kx), (float)geom_comp(a, ky), (float)geom_comp(a, kz),
 		       (float)geom_comp(b, kx), (float)geom_comp(b, ky), (float)geom_comp(b, kz),
 		       (float)geom_comp(c, kx), (float)geom_comp(c, ky), (float)geom_comp(c, kz) };
 	float sv = 0;
 	for (int k = 0; k < 9; k++)
-		sv = fabsf(v[k]) > sv ? fabsf(v[k]) : sv; /* NaN: left out, but NaN below rejects nothing */
-	__m128 S = _mm_max_ps(q->so, _mm_set1_ps(sv));
-	__m128 Az = _mm_sub_ps(_mm_set1_ps(v[2]), q->oz), Bz = _mm_sub_ps(_mm_set1_ps(v[5]), q->oz),
-	       Cz = _mm_sub_ps(_mm_set1_ps(v[8]), q->oz);
-	__m128 ax = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[0]), q->ox), _mm_mul_ps(q->sx, Az));
-	__m128 ay = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[1]), q->oy), _mm_mul_ps(q->sy, Az));
-	__m128 bx = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[3]), q->ox), _mm_mul_ps(q->sx, Bz));
-	__m128 by = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[4]), q->oy), _mm_mul_ps(q->sy, Bz));
-	__m128 cx = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[6]), q->ox), _mm_mul_ps(q->sx, Cz));
-	__m128 cy = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(v[7]), q->oy), _mm_mul_ps(q->sy, Cz));
-	__m128 p1 = _mm_mul_ps(cx, by), p2 = _mm_mul_ps(cy, bx); /* U */
-	__m128 p3 = _mm_mul_ps(ax, cy), p4 = _mm_mul_ps(ay, cx); /* V */
-	__m128 p5 = _mm_mul_ps(bx, ay), p6 = _mm_mul_ps(by, ax); /* W */
-	__m128 U = _mm_sub_ps(p1, p2), V = _mm_sub_ps(p3, p4), W = _mm_sub_ps(p5, p6);
-	__m128 E2 = _mm_add_ps(_mm_mul_ps(S, _mm_set1_ps(0x1p-19f)), _mm_set1_ps(0x1p-140f));
-	__m128 two_e2 = _mm_add_ps(E2, E2), two_e2sq = _mm_mul_ps(two_e2, E2);
-	__m128 Aab = _mm_add_ps(abs4(ax), abs4(ay)), Bab = _mm_add_ps(abs4(bx), abs4(by)),
-	       Cab = _mm_add_ps(abs4(cx), abs4(cy));
-	const __m128 two_u = _mm_set1_ps(0x1p-23f), floor4 = _mm_set1_ps(0x1p-120f);
-	/* 2 [E2 (sum of |.|) + 2 E2^2 + 2u (|p| + |q|)] + 2^-120 */
-#define MARGIN(s1, s2, pa, pb)                                                                                   \
-	_mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(E2, _mm_add_ps(s1, s2)), two_e2sq),                 \
-					 _mm_mul_ps(two_u, _mm_add_ps(abs4(pa), abs4(pb)))),                        \
-			      _mm_set1_ps(2.0f)),                                                                   \
-		   floor4)
-	__m128 mU = MARGIN(Bab, Cab, p1, p2), mV = MARGIN(Aab, Cab, p3, p4), mW = MARGIN(Aab, Bab, p5, p6);
-#undef MARGIN
-	__m128 zero = _mm_setzero_ps();
-	__m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, _mm_sub_ps(zero, mU)), _mm_cmplt_ps(V, _mm_sub_ps(zero, mV))),
-			       _mm_cmplt_ps(W, _mm_sub_ps(zero, mW)));
-	__m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, mU), _mm_cmpgt_ps(V, mV)), _mm_cmpgt_ps(W, mW));
-	return (unsigned)_mm_movemask_ps(_mm_and_ps(neg, pos));
+		sv = fabsf(f[k]) > sv ? fabsf(f[k]) : sv; /* NaN: left out, but NaN below rejects nothing */
+	__m128 v[9];
+	for (int k = 0; k < 9; k++)
+		v[k] = _mm_set1_ps(f[k]);
+	return tri_reject_ps(v, _mm_set1_ps(sv), q->ox, q->oy, q->oz, q->sx, q->sy, q->so);
 }
 
 /* A leaf of n references from idx tested for the rays in lanes (two or
@@ -1177,12 +1367,34 @@ static inline __attribute__((always_inline)) void leaf4(const struct accel *A, c
 			if (q->ok) {
 				const struct gmesh *m = &g->mesh[g->tri[REF_IDX(ref)].mesh];
 				const uint32_t *ix = tri_ix(m, g->tri[REF_IDX(ref)].tri);
-				test &= ~tri4_reject(q, &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]]);
+				test &= ~tri4_reject_v(q, &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]]);
 			}
 		}
 		for (; test; test &= test - 1) {
 			int i = __builtin_ctz(test);
 			found[i] |= ref_test(A, g, ref, &tr[i], &best[i], false);
+		}
+	}
+}
+
+/* leaf4 for a leaf block of n triangles: each triangle's pre-test against
+ * the rays in lanes (two or more) reads the block. */
+static inline __attribute__((always_inline)) void leaf4_block(const struct group *g, struct trace tr[4],
+							      struct cand best[4], bool found[4],
+							      const float *tb, uint32_t n, unsigned lanes,
+							      struct tri4 *q, bool *q_ready)
+{
+	if (!*q_ready) {
+		tri4_init(q, tr);
+		*q_ready = true;
+	}
+	for (uint32_t l = 0; l < n; l++) {
+		unsigned test = lanes;
+		if (q->ok)
+			test &= ~tri4_reject(q, tb, n, l);
+		for (; test; test &= test - 1) {
+			int i = __builtin_ctz(test);
+			found[i] |= tri_test(g, blk_ref(tb, n, l), &tr[i], &best[i]);
 		}
 	}
 }
@@ -1225,7 +1437,18 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 		if (n) {
 			/* the rays that meet the leaf, in front of their closest hit */
 			unsigned lanes = lanes_in_front(tcur, tmax4, inf4);
-			if (lanes & (lanes - 1)) { /* two or more: the triangle pre-test pays */
+			if (n & LEAF_BLOCK) {
+				const float *tb = &g->tblk[idx];
+				uint32_t nt = n & ~LEAF_BLOCK;
+				if (lanes & (lanes - 1)) {
+					leaf4_block(g, tr, best, found, tb, nt, lanes, &q, &q_ready);
+				} else if (lanes) {
+					int i = __builtin_ctz(lanes);
+					struct tri1 q1;
+					bool q1_ready = false;
+					found[i] |= block_hit(g, tb, nt, &tr[i], &best[i], &q1, &q1_ready);
+				}
+			} else if (lanes & (lanes - 1)) { /* two or more: the triangle pre-test pays */
 				leaf4(A, g, tr, best, found, idx, n, lanes, &q, &q_ready);
 			} else if (lanes) {
 				int i = __builtin_ctz(lanes);
@@ -1390,7 +1613,22 @@ static inline __attribute__((always_inline)) void bvh_occluded4(const struct acc
 	uint32_t idx = 0, n = 0;
 	uint32_t polls = ACCEL_POLL_POPS;
 	for (;;) {
-		if (n) {
+		if (n & LEAF_BLOCK) { /* the block's references; no pre-test (it did not pay here) */
+			const float *tb = &g->tblk[idx];
+			uint32_t nt = n & ~LEAF_BLOCK;
+			for (uint32_t k = 0; k < nt && (lanes &= act); k++) {
+				uint32_t ref = blk_ref(tb, nt, k);
+				for (unsigned l = lanes; l; l &= l - 1) {
+					int i = __builtin_ctz(l);
+					if (tri_occludes(g, ref, &tr[i])) {
+						act &= ~(1u << i);
+						*hint = ref;
+					}
+				}
+			}
+			if (!act)
+				break;
+		} else if (n) {
 			for (uint32_t k = 0; k < n && (lanes &= act); k++) {
 				uint32_t ref = group_ref(g, idx + k);
 				for (unsigned l = lanes; l; l &= l - 1) {

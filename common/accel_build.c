@@ -39,6 +39,7 @@ static void group_free(struct group *g)
 	free(g->xp);
 	free(g->inst);
 	free(g->bake);
+	free(g->tblk);
 	free(g);
 }
 
@@ -310,6 +311,79 @@ static int push_triangle(struct refbuf *rb, uint32_t ref, vec3 a, vec3 b, vec3 c
 		return refbuf_push(rb, ref, pad_box(bx));
 	vec3 p[3] = { a, b, c };
 	return push_pieces(rb, ref, p, 3, 0);
+}
+
+/* Whether child c of node nd is a leaf of one to ACCEL_MAX_LEAF
+ * triangles (LEAF BLOCKS). */
+static bool tri_leaf(const struct group *g, const struct bvh4 *nd, int c)
+{
+	uint32_t n = nd->n[c];
+	if (n == 0 || n > ACCEL_MAX_LEAF || isnan(nd->lo[0][c]))
+		return false;
+	for (uint32_t k = 0; k < n; k++)
+		if (REF_KIND(g->refs[nd->idx[c] + k]) != REF_TRI)
+			return false;
+	return true;
+}
+
+/*
+ * LEAF BLOCKS (accel_int.h): every leaf of g's tree that is one to
+ * ACCEL_MAX_LEAF triangles gets its block, and its node child the
+ * block's offset in g->tblk and the LEAF_BLOCK flag. A group whose blocks
+ * would not fit 32-bit offsets gets none (its leaves are tested as
+ * before, with the same hits). Returns 0, -1 when out of memory, or
+ * ACCEL_CANCELLED.
+ */
+static int make_blocks(struct group *g)
+{
+	uint64_t words = 0;
+	for (uint32_t k = 0; k < g->bvh.n_nodes4; k++) {
+		if (cancel_poll_every(k))
+			return ACCEL_CANCELLED;
+		for (int c = 0; c < 4; c++)
+			if (tri_leaf(g, &g->bvh.nodes[k], c))
+				words += BLK_ROWS * (uint64_t)g->bvh.nodes[k].n[c];
+	}
+	if (!words || words + BLK_PAD > UINT32_MAX)
+		return 0; /* no blocks: the leaves as they are (the same hits) */
+	g->tblk = calloc(words + BLK_PAD, sizeof *g->tblk);
+	if (!g->tblk)
+		return -1;
+	g->n_tblk = (uint32_t)(words + BLK_PAD);
+	g->bytes += (size_t)g->n_tblk * sizeof *g->tblk;
+	uint32_t at = 0;
+	for (uint32_t k = 0; k < g->bvh.n_nodes4; k++) {
+		if (cancel_poll_every(k))
+			return ACCEL_CANCELLED;
+		struct bvh4 *nd = &g->bvh.nodes[k];
+		for (int c = 0; c < 4; c++) {
+			if (!tri_leaf(g, nd, c))
+				continue;
+			uint32_t n = nd->n[c];
+			float *b = &g->tblk[at];
+			for (uint32_t l = 0; l < n; l++) {
+				uint32_t ref = g->refs[nd->idx[c] + l];
+				const struct gtri *t = &g->tri[REF_IDX(ref)];
+				const struct gmesh *m = &g->mesh[t->mesh];
+				const uint32_t *ix = tri_ix(m, t->tri);
+				float sv = 0;
+				for (uint32_t j = 0; j < 3; j++)
+					for (uint32_t q = 0; q < 3; q++) {
+						float f = (float)geom_comp(&m->v[ix[j]], (int)q);
+						b[(3 * j + q) * n + l] = f;
+						/* as tri4_init's and the packets' once: a NaN is
+						 * left out (it makes every comparison false) */
+						sv = fabsf(f) > sv ? fabsf(f) : sv;
+					}
+				b[9 * n + l] = sv;
+				memcpy(&b[10 * n + l], &ref, sizeof ref);
+			}
+			nd->n[c] |= LEAF_BLOCK;
+			nd->idx[c] = at;
+			at += BLK_ROWS * n;
+		}
+	}
+	return 0;
 }
 
 /* The group of define d, built once. */
@@ -690,6 +764,11 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 				goto cancelled;
 			g->refs[k] = all[perm[k]];
 		}
+		int mrc = make_blocks(g);
+		if (mrc == ACCEL_CANCELLED)
+			goto cancelled;
+		if (mrc < 0)
+			goto oom;
 	}
 	if (n_bounded) { /* back to the group's space, covering the padding */
 		g->bounds.lo = v3_add(g->bounds.lo, g->center);

@@ -11,6 +11,8 @@
 #include "common/bvh.h"
 #include "common/geom.h"
 
+#include <string.h>
+
 enum { REF_SPHERE = 0, REF_TRI = 1, REF_XPRIM = 2, REF_INST = 3 };
 #define REF_MAKE(k, i) ((uint32_t)(k) << 30 | (uint32_t)(i))
 #define REF_KIND(r) ((r) >> 30)
@@ -79,6 +81,40 @@ struct ginst {
 	uint32_t rec;
 };
 
+/*
+ * LEAF BLOCKS. A leaf of one to ACCEL_MAX_LEAF references that are all
+ * triangles gets, at build time, a block of its triangles' vertices in
+ * float, one triangle per SIMD lane (struct-of-arrays), so that one ray is
+ * tested against the whole leaf in one float pass (the TRIANGLE PRE-TEST,
+ * accel.c) and the packets read the floats without gathering them. The
+ * node's child then has n = count | LEAF_BLOCK and idx = the block's offset
+ * in group.tblk. A block of n triangles is BLK_ROWS rows of n words: row
+ * 3j + k holds component k (x, y, z) of vertex j (a, b, c) of each
+ * triangle, the double rounded to nearest float; row 9 the largest
+ * magnitude of each triangle's nine floats; row 10 the leaf's references
+ * (their bits, in leaf order), so the traversal never reads group.refs
+ * for it. Rows are n wide, not 4 (44 bytes a triangle, where leaves hold
+ * 1.5 triangles on average): a 4-lane load of a row reads the next rows'
+ * words into the lanes past n, whose answers are never used, and the
+ * array ends with BLK_PAD words of padding so that the last load stays
+ * inside it.
+ */
+#define LEAF_BLOCK 0x80000000u
+_Static_assert(ACCEL_MAX_REFS <= LEAF_BLOCK, "leaf sizes leave bvh4.n's flag bit free");
+#define BLK_ROWS 11
+#define BLK_PAD 3
+
+/* Row r of block b of n triangles. */
+static inline const float *blk_row(const float *b, uint32_t n, uint32_t r) { return b + r * n; }
+
+/* The reference of lane l of block b of n triangles. */
+static inline uint32_t blk_ref(const float *b, uint32_t n, uint32_t l)
+{
+	uint32_t ref;
+	memcpy(&ref, b + 10 * n + l, sizeof ref);
+	return ref;
+}
+
 struct group {
 	struct bvh bvh;
 	uint32_t *refs; /* bounded references in leaf order; NULL in a group of
@@ -97,6 +133,8 @@ struct group {
 	struct ginst *inst;
 	uint32_t n_inst;
 	vec3 *bake;     /* baked vertices and normals (owned) */
+	float *tblk;    /* LEAF BLOCKS (owned), n_tblk words */
+	uint32_t n_tblk;
 	struct geom_box bounds; /* of the bounded references */
 	const struct geom_obj *plane1; /* the only unbounded reference when it is an
 					  untransformed plane (tested inline), else NULL */
