@@ -34,12 +34,22 @@ typedef vec3 (*filter_trace_fn)(void *arg, const struct ray *r, uint64_t seed);
  * neighbouring rays traced together: accel_intersect4, shade_eye_hit4). */
 typedef void (*filter_trace4_fn)(void *arg, const struct ray r[4], const uint64_t seed[4], int n, vec3 out[4]);
 
+/* Columns and rows of a super-sample grid whose offsets the chain keeps
+ * (a grid with more computes its offsets sample by sample). */
+#define FILTER_GRID_TAB 16
+/* Sample indices whose part of the seed (rng_seed_s) the chain keeps. */
+#define FILTER_SEED_TAB 64
+
 struct filter_chain {
 	struct cam cam;
 	struct scene_filter base;                 /* kind STANDARD or ADAPTIVE */
 	struct scene_filter layers[LIM_FILTERS];  /* the multiplying filters after the base */
 	int n_layers;
 	int cache_size;                           /* adaptive corner cache entries (0 = none) */
+	/* super-sample layer i's offsets from the incoming position, when its
+	 * grid fits: column a's (a + 0.5) / x_samples - 0.5, row b's likewise */
+	double grid_dx[LIM_FILTERS][FILTER_GRID_TAB], grid_dy[LIM_FILTERS][FILTER_GRID_TAB];
+	uint64_t seed_s[FILTER_SEED_TAB];         /* rng_seed_s(s) of sample index s */
 };
 
 /*
@@ -98,6 +108,10 @@ bool filter_single_ray(const struct filter_chain *fc);
 /* The eye ray through pixel (x, y)'s centre and its sample seed, as
  * filter_pixel traces them for a filter_single_ray chain. */
 void filter_eye_ray(const struct filter_chain *fc, uint32_t x, uint32_t y, struct ray *r, uint64_t *seed);
+/* filter_eye_ray of n <= 4 pixels (x[k], y[k]) into r[k] and seed[k], bit
+ * for bit, the camera's divisions and square roots two at a time (cam_ray4). */
+void filter_eye_ray4(const struct filter_chain *fc, const uint32_t x[4], const uint32_t y[4], int n, struct ray r[4],
+		     uint64_t seed[4]);
 
 /*
  * Colour at a continuous pixel position (px, py) with every layered filter
