@@ -572,6 +572,106 @@ vec3 filter_pixel4(const struct filter_chain *fc, struct filter_scratch *scratch
 	return v;
 }
 
+/* A packet of grid rays from several pixels: m <= 4 rays, their seeds
+ * and the pixel each belongs to. */
+struct grid_packet {
+	int m;
+	int pix[4];
+	uint64_t seed[4];
+	struct ray r[4];
+};
+
+/* The samples of filter_pixels4's pixels in order: pixel p, its sample k
+ * in column a and row b of the grid. */
+struct grid_stream {
+	const struct filter_chain *fc;
+	uint32_t x, y, xs;
+	int n;
+	uint64_t n_smp;
+	const vec3 (*col)[FILTER_GRID_TAB]; /* cam_col of pixel p's column a */
+	const vec3 *row;                    /* cam_row of row b */
+	int p;
+	uint32_t a, b;
+	uint64_t k;
+};
+
+/* The stream's next (up to) four samples into g; g->m = 0 at its end. */
+static void grid_fill(struct grid_stream *st, struct grid_packet *g)
+{
+	vec3 d[4];
+	int m = 0;
+	while (m < 4 && st->p < st->n) {
+		d[m] = v3_add(st->fc->cam.vd, v3_add(st->col[st->p][st->a], st->row[st->b])); /* cam_dir's sum */
+		g->seed[m] = seed_tab(st->fc, st->x + (uint32_t)st->p, st->y, st->k);
+		g->pix[m++] = st->p;
+		if (++st->a == st->xs) {
+			st->a = 0;
+			st->b++;
+		}
+		if (++st->k == st->n_smp) {
+			st->k = 0;
+			st->a = st->b = 0;
+			st->p++;
+		}
+	}
+	g->m = m;
+	if (m)
+		cam_unit4(&st->fc->cam, d, m, g->r);
+}
+
+void filter_pixels4(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x, uint32_t y, int n,
+		    filter_trace_fn fn, filter_trace4_fn fn4, void *arg, uint64_t *rays, vec3 out[4])
+{
+	const struct scene_filter *f = &fc->layers[0];
+	if (!fn4 || fc->base.kind != FILTER_STANDARD || fc->n_layers != 1 || f->kind != FILTER_SUPERSAMPLE ||
+	    f->x_samples > FILTER_GRID_TAB || f->y_samples > FILTER_GRID_TAB) {
+		for (int p = 0; p < n; p++)
+			out[p] = filter_pixel4(fc, scratch, x + (uint32_t)p, y, fn, fn4, arg, rays);
+		return;
+	}
+	/* expand_grid4 of each pixel's sample: position (x + p + 0.5, y +
+	 * 0.5), index 0, seeded at (x + p, y) */
+	vec3 col[4][FILTER_GRID_TAB], row[FILTER_GRID_TAB], sum[4];
+	double wsum[4];
+	struct grid_stream st = { fc, x, y, (uint32_t)f->x_samples, n, (uint64_t)f->x_samples * (uint64_t)f->y_samples,
+				  col, row, 0, 0, 0, 0 };
+	for (int p = 0; p < n; p++) {
+		double px = (x + (uint32_t)p) + 0.5;
+		for (int a = 0; a < f->x_samples; a++)
+			col[p][a] = cam_col(&fc->cam, px + fc->grid_dx[0][a]);
+		sum[p] = v3(0, 0, 0);
+		wsum[p] = 0;
+	}
+	double py = y + 0.5;
+	for (int b = 0; b < f->y_samples; b++)
+		row[b] = cam_row(&fc->cam, py + fc->grid_dy[0][b]);
+	/* the next packet is made before this one is traced, so its square
+	 * roots and divisions run alongside this one's traversal */
+	struct grid_packet pk[2];
+	int cur = 0;
+	uint64_t traced = 0;
+	grid_fill(&st, &pk[0]);
+	while (pk[cur].m > 0) {
+		if (cancel_poll()) /* CANCELLATION: the samples left are skipped */
+			break;
+		grid_fill(&st, &pk[cur ^ 1]);
+		const struct grid_packet *g = &pk[cur];
+		vec3 v[4];
+		fn4(arg, g->r, g->seed, g->m, v);
+		traced += (uint64_t)g->m;
+		for (int j = 0; j < g->m; j++) { /* expand_grid4's sums, pixel by pixel */
+			int q = g->pix[j];
+			sum[q] = v3_add(sum[q], v3_scale(v[j], 1.0));
+			wsum[q] += 1.0;
+		}
+		cur ^= 1;
+	}
+	for (int p = 0; p < n; p++)
+		out[p] = wsum[p] > 0 ? v3_scale(sum[p], 1.0 / wsum[p]) : v3(0, 0, 0);
+	if (rays)
+		*rays += traced;
+}
+
 void filter_quantise(vec3 c, uint8_t out[3])
 {
 	/* the values are >= 0.5, so truncation is floor */

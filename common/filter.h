@@ -98,6 +98,19 @@ vec3 filter_pixel4(const struct filter_chain *fc, struct filter_scratch *scratch
 		   filter_trace_fn fn, filter_trace4_fn fn4, void *arg, uint64_t *rays);
 
 /*
+ * filter_pixel4 of the n <= 4 pixels (x + p, y), p < n, into out[p], each
+ * the same colour bit for bit, *rays increased by all their rays. When the
+ * chain is standard with one super-sample grid layered on it (at most
+ * FILTER_GRID_TAB columns and rows), the pixels' rays, in order, fill
+ * packets of four across the pixels' boundaries (a 3 x 3 grid: nine
+ * packets for four pixels, not eight and four single rays) and each
+ * pixel's colours are summed in its own order; the cancel flag is polled
+ * once a packet. Any other chain: filter_pixel4 pixel by pixel.
+ */
+void filter_pixels4(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x, uint32_t y, int n,
+		    filter_trace_fn fn, filter_trace4_fn fn4, void *arg, uint64_t *rays, vec3 out[4]);
+
+/*
  * True when the chain traces one pinhole eye ray per pixel, through its
  * centre (filter standard with nothing layered on it). filter_pixel's
  * colour is then fn(arg, &r, seed) of the ray and seed filter_eye_ray

@@ -467,6 +467,42 @@ int main(void)
 			}
 		}
 	CHECK(found > 9 * 4); /* some pixels subdivided */
+	/* filter_pixels4: n = 1..4 pixels of a row, each filter_pixel's colour
+	 * bit for bit and the same rays; a grid's rays in packets of four
+	 * across the pixels (3 x 3 over 4 pixels: 9 packets), other chains
+	 * pixel by pixel */
+	for (int kind = 0; kind < 9; kind++) {
+		static const int pg[][2] = { { 3, 3 }, { 2, 2 }, { 1, 1 }, { 5, 3 }, { 16, 1 }, { 17, 2 } };
+		c = base_camera();
+		add(&c, kind == 8 ? FILTER_ADAPTIVE : FILTER_STANDARD);
+		if (kind == 6) {
+			add(&c, FILTER_LENS);
+			c.filters[1].samples = 2;
+		}
+		if (kind < 7) {
+			add(&c, FILTER_SUPERSAMPLE);
+			c.filters[c.n_filters - 1].x_samples = pg[kind % 6][0];
+			c.filters[c.n_filters - 1].y_samples = pg[kind % 6][1];
+		}
+		if (kind == 8)
+			c.filters[0].threshold = 0.05;
+		chain(&fc, &c, 11, 5);
+		for (uint32_t y = 0; y < 5; y += 2)
+			for (int n = 1; n <= 4; n++)
+				for (uint32_t x = 0; x + (uint32_t)n <= 11; x += 3) {
+					vec3 out[4];
+					uint64_t ra = 0, rb = 0;
+					n_packets = 0;
+					filter_pixels4(&fc, NULL, x, y, n, trace_noisy, trace_noisy4, NULL, &rb, out);
+					if (kind == 0)
+						CHECK(n_packets == (9 * n + 3) / 4);
+					for (int p = 0; p < n; p++) {
+						vec3 one = filter_pixel(&fc, NULL, x + (uint32_t)p, y, trace_noisy, NULL, &ra);
+						CHECK(memcmp(&one, &out[p], sizeof one) == 0);
+					}
+					CHECK(ra == rb);
+				}
+	}
 	/* filter_eye_ray4: filter_eye_ray's rays and seeds, n = 1..4 */
 	c = base_camera();
 	chain(&fc, &c, 40, 30);
