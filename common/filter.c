@@ -180,6 +180,11 @@ static uint64_t seed_of(uint32_t x, uint32_t y, uint64_t s)
 	return (s >> 32) ? rng_derive(seed, s >> 32) : seed;
 }
 
+/* seed_of(x, y, 0), out of line: inlined into the loops that make four eye
+ * rays, gcc -O3 made four of them at once in SSE2, whose 64-bit products
+ * take three 32-bit ones each (2% slower on tetra_s4's plain renders). */
+static __attribute__((noinline)) uint64_t seed0(uint32_t x, uint32_t y) { return seed_of(x, y, 0); }
+
 /* seed_of with the chain's rng_seed_s of the first sample indices. */
 static inline uint64_t seed_tab(const struct filter_chain *fc, uint32_t x, uint32_t y, uint64_t s)
 {
@@ -456,7 +461,7 @@ static void corners(struct adapt *a, int n, const uint32_t x[], const uint32_t y
 			int i = miss[j0 + j];
 			px[j] = (double)x[i] / a->grid;
 			py[j] = (double)y[i] / a->grid;
-			seed[j] = seed_of(x[i], y[i], 0);
+			seed[j] = seed0(x[i], y[i]);
 		}
 		cam_ray4(&fc->cam, px, py, m, r);
 		if (!cancel_poll()) /* CANCELLATION: black, a wrong colour never used */
@@ -535,7 +540,7 @@ void filter_eye_ray4(const struct filter_chain *fc, const uint32_t x[4], const u
 	for (int k = 0; k < n; k++) {
 		px[k] = x[k] + 0.5;
 		py[k] = y[k] + 0.5;
-		seed[k] = seed_of(x[k], y[k], 0);
+		seed[k] = seed0(x[k], y[k]);
 	}
 	cam_ray4(&fc->cam, px, py, n, r);
 }
@@ -595,28 +600,36 @@ struct grid_stream {
 	uint64_t k;
 };
 
-/* The stream's next (up to) four samples into g; g->m = 0 at its end. */
+/* The stream's next (up to) four samples into g; g->m = 0 at its end. The
+ * counters are kept in locals: g's stores could alias them. */
 static void grid_fill(struct grid_stream *st, struct grid_packet *g)
 {
+	const struct filter_chain *fc = st->fc;
 	vec3 d[4];
-	int m = 0;
-	while (m < 4 && st->p < st->n) {
-		d[m] = v3_add(st->fc->cam.vd, v3_add(st->col[st->p][st->a], st->row[st->b])); /* cam_dir's sum */
-		g->seed[m] = seed_tab(st->fc, st->x + (uint32_t)st->p, st->y, st->k);
-		g->pix[m++] = st->p;
-		if (++st->a == st->xs) {
-			st->a = 0;
-			st->b++;
+	int m = 0, p = st->p;
+	uint32_t a = st->a, b = st->b;
+	uint64_t k = st->k;
+	while (m < 4 && p < st->n) {
+		d[m] = v3_add(fc->cam.vd, v3_add(st->col[p][a], st->row[b])); /* cam_dir's sum */
+		g->seed[m] = seed_tab(fc, st->x + (uint32_t)p, st->y, k);
+		g->pix[m++] = p;
+		if (++a == st->xs) {
+			a = 0;
+			b++;
 		}
-		if (++st->k == st->n_smp) {
-			st->k = 0;
-			st->a = st->b = 0;
-			st->p++;
+		if (++k == st->n_smp) {
+			k = 0;
+			a = b = 0;
+			p++;
 		}
 	}
+	st->p = p;
+	st->a = a;
+	st->b = b;
+	st->k = k;
 	g->m = m;
 	if (m)
-		cam_unit4(&st->fc->cam, d, m, g->r);
+		cam_unit4(&fc->cam, d, m, g->r);
 }
 
 void filter_pixels4(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x, uint32_t y, int n,
