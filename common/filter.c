@@ -545,6 +545,20 @@ void filter_eye_ray4(const struct filter_chain *fc, const uint32_t x[4], const u
 	cam_ray4(&fc->cam, px, py, n, r);
 }
 
+void filter_eye_block(const struct filter_chain *fc, uint32_t x, uint32_t y, struct ray r[4], uint64_t seed[4])
+{
+	const struct cam *c = &fc->cam;
+	vec3 c0 = cam_col(c, x + 0.5), c1 = cam_col(c, (x + 1) + 0.5);
+	vec3 r0 = cam_row(c, y + 0.5), r1 = cam_row(c, (y + 1) + 0.5);
+	vec3 d[4] = { v3_add(c->vd, v3_add(c0, r0)), v3_add(c->vd, v3_add(c1, r0)), v3_add(c->vd, v3_add(c0, r1)),
+		      v3_add(c->vd, v3_add(c1, r1)) };
+	cam_unit4(c, d, 4, r);
+	seed[0] = seed0(x, y);
+	seed[1] = seed0(x + 1, y);
+	seed[2] = seed0(x, y + 1);
+	seed[3] = seed0(x + 1, y + 1);
+}
+
 vec3 filter_pixel(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x,
 		  uint32_t y, filter_trace_fn fn, void *arg, uint64_t *rays)
 {

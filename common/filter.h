@@ -97,6 +97,11 @@ vec3 filter_pixel(const struct filter_chain *fc, struct filter_scratch *scratch,
 vec3 filter_pixel4(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x, uint32_t y,
 		   filter_trace_fn fn, filter_trace4_fn fn4, void *arg, uint64_t *rays);
 
+/* filter_eye_ray4 of the 2x2 block of pixels (x, y), (x + 1, y), (x, y + 1),
+ * (x + 1, y + 1) in that order, bit for bit: its two columns and two rows
+ * computed once (cam_col, cam_row), the four rays made unit together. */
+void filter_eye_block(const struct filter_chain *fc, uint32_t x, uint32_t y, struct ray r[4], uint64_t seed[4]);
+
 /*
  * filter_pixel4 of the n <= 4 pixels (x + p, y), p < n, into out[p], each
  * the same colour bit for bit, *rays increased by all their rays. When the

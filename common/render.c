@@ -284,7 +284,10 @@ static bool next_block(struct block_walk *w, struct eye_block *b)
 		if (n == 0)
 			continue;
 		b->n = n;
-		filter_eye_ray4(&r->fc, px, py, n, b->e, b->seed);
+		if (n == 4) /* the whole block: its columns and rows shared */
+			filter_eye_block(&r->fc, px[0], py[0], b->e, b->seed);
+		else
+			filter_eye_ray4(&r->fc, px, py, n, b->e, b->seed);
 		if (n >= PACKET_MIN_RAYS)
 			eye_rays4(b->e, n, b->u, b->ok);
 		return true;

@@ -503,6 +503,21 @@ int main(void)
 					CHECK(ra == rb);
 				}
 	}
+	/* filter_eye_block: filter_eye_ray's rays and seeds of a 2x2 block */
+	c = base_camera();
+	chain(&fc, &c, 41, 31);
+	for (uint32_t y = 0; y + 1 < 31; y += 3)
+		for (uint32_t x = 0; x + 1 < 41; x += 5) {
+			struct ray rb[4];
+			uint64_t sb[4];
+			filter_eye_block(&fc, x, y, rb, sb);
+			for (uint32_t k = 0; k < 4; k++) {
+				struct ray e1;
+				uint64_t s1;
+				filter_eye_ray(&fc, x + (k & 1), y + (k >> 1), &e1, &s1);
+				CHECK(memcmp(&e1, &rb[k], sizeof e1) == 0 && s1 == sb[k]);
+			}
+		}
 	/* filter_eye_ray4: filter_eye_ray's rays and seeds, n = 1..4 */
 	c = base_camera();
 	chain(&fc, &c, 40, 30);
