@@ -26,6 +26,7 @@ struct cam {
 	double x_size;   /* film width, spread over w pixels */
 	double y_size;   /* film height, spread over h pixels */
 	uint32_t w, h;   /* image size in pixels */
+	vec3 vd;         /* view * depth: look-from to the film centre */
 };
 
 /*
@@ -41,6 +42,29 @@ vec3 cam_film_point(const struct cam *c, double px, double py);
 /* Pinhole eye ray through (px, py): origin look-from, unit direction toward
  * the film point, tmin 0, tmax infinity. */
 struct ray cam_ray(const struct cam *c, double px, double py);
+
+/*
+ * The two parts of the direction toward the film point of (px, py):
+ * cam_col(px) = right * ((px / w - 0.5) * x_size) and cam_row(py) = down *
+ * ((py / h - 0.5) * y_size); the direction is vd + (cam_col + cam_row),
+ * exactly as cam_ray computes it. A grid of positions shares its columns
+ * and rows, so it pays a division per column and per row, not per ray.
+ */
+vec3 cam_col(const struct cam *c, double px);
+vec3 cam_row(const struct cam *c, double py);
+
+/*
+ * Pinhole eye rays r[k], k < n <= 4, with directions d[k] (look-from to a
+ * film point, not unit) made unit as cam_ray makes them (v3_norm): with
+ * d[k] = vd + (cam_col(px) + cam_row(py)), r[k] is cam_ray(c, px, py) bit
+ * for bit. The square roots and divisions go two rays at a time (SSE2:
+ * packed IEEE operations, the same results as the scalar ones).
+ */
+void cam_unit4(const struct cam *c, const vec3 d[4], int n, struct ray r[4]);
+
+/* cam_ray of n <= 4 positions (px[k], py[k]) into r[k], bit for bit, with
+ * the divisions and square roots two rays at a time (cam_unit4). */
+void cam_ray4(const struct cam *c, const double px[4], const double py[4], int n, struct ray r[4]);
 
 /*
  * Thin-lens eye ray through (px, py): the lens is centred on look-from, in the

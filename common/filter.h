@@ -34,12 +34,22 @@ typedef vec3 (*filter_trace_fn)(void *arg, const struct ray *r, uint64_t seed);
  * neighbouring rays traced together: accel_intersect4, shade_eye_hit4). */
 typedef void (*filter_trace4_fn)(void *arg, const struct ray r[4], const uint64_t seed[4], int n, vec3 out[4]);
 
+/* Columns and rows of a super-sample grid whose offsets the chain keeps
+ * (a grid with more computes its offsets sample by sample). */
+#define FILTER_GRID_TAB 16
+/* Sample indices whose part of the seed (rng_seed_s) the chain keeps. */
+#define FILTER_SEED_TAB 64
+
 struct filter_chain {
 	struct cam cam;
 	struct scene_filter base;                 /* kind STANDARD or ADAPTIVE */
 	struct scene_filter layers[LIM_FILTERS];  /* the multiplying filters after the base */
 	int n_layers;
 	int cache_size;                           /* adaptive corner cache entries (0 = none) */
+	/* super-sample layer i's offsets from the incoming position, when its
+	 * grid fits: column a's (a + 0.5) / x_samples - 0.5, row b's likewise */
+	double grid_dx[LIM_FILTERS][FILTER_GRID_TAB], grid_dy[LIM_FILTERS][FILTER_GRID_TAB];
+	uint64_t seed_s[FILTER_SEED_TAB];         /* rng_seed_s(s) of sample index s */
 };
 
 /*
@@ -87,6 +97,24 @@ vec3 filter_pixel(const struct filter_chain *fc, struct filter_scratch *scratch,
 vec3 filter_pixel4(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x, uint32_t y,
 		   filter_trace_fn fn, filter_trace4_fn fn4, void *arg, uint64_t *rays);
 
+/* filter_eye_ray4 of the 2x2 block of pixels (x, y), (x + 1, y), (x, y + 1),
+ * (x + 1, y + 1) in that order, bit for bit: its two columns and two rows
+ * computed once (cam_col, cam_row), the four rays made unit together. */
+void filter_eye_block(const struct filter_chain *fc, uint32_t x, uint32_t y, struct ray r[4], uint64_t seed[4]);
+
+/*
+ * filter_pixel4 of the n <= 4 pixels (x + p, y), p < n, into out[p], each
+ * the same colour bit for bit, *rays increased by all their rays. When the
+ * chain is standard with one super-sample grid layered on it (at most
+ * FILTER_GRID_TAB columns and rows), the pixels' rays, in order, fill
+ * packets of four across the pixels' boundaries (a 3 x 3 grid: nine
+ * packets for four pixels, not eight and four single rays) and each
+ * pixel's colours are summed in its own order; the cancel flag is polled
+ * once a packet. Any other chain: filter_pixel4 pixel by pixel.
+ */
+void filter_pixels4(const struct filter_chain *fc, struct filter_scratch *scratch, uint32_t x, uint32_t y, int n,
+		    filter_trace_fn fn, filter_trace4_fn fn4, void *arg, uint64_t *rays, vec3 out[4]);
+
 /*
  * True when the chain traces one pinhole eye ray per pixel, through its
  * centre (filter standard with nothing layered on it). filter_pixel's
@@ -98,6 +126,10 @@ bool filter_single_ray(const struct filter_chain *fc);
 /* The eye ray through pixel (x, y)'s centre and its sample seed, as
  * filter_pixel traces them for a filter_single_ray chain. */
 void filter_eye_ray(const struct filter_chain *fc, uint32_t x, uint32_t y, struct ray *r, uint64_t *seed);
+/* filter_eye_ray of n <= 4 pixels (x[k], y[k]) into r[k] and seed[k], bit
+ * for bit, the camera's divisions and square roots two at a time (cam_ray4). */
+void filter_eye_ray4(const struct filter_chain *fc, const uint32_t x[4], const uint32_t y[4], int n, struct ray r[4],
+		     uint64_t seed[4]);
 
 /*
  * Colour at a continuous pixel position (px, py) with every layered filter

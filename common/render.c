@@ -18,6 +18,10 @@
 #include <string.h>
 #include <unistd.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "common/accel.h"
 #include "common/cancel.h"
 #include "common/filter.h"
@@ -118,27 +122,60 @@ static vec3 trace_shade(void *arg, const struct ray *ray, uint64_t seed)
 }
 
 /*
- * filter_trace4_fn over the shading engine: the colours of n <= 4 eye rays
- * e[k], their closest hits from one accel_intersect4 and their shadow rays
- * in packets (shade_eye_hit4), each what trace_shade gives (bit for bit).
- * Fewer than PACKET_MIN_RAYS rays go one by one through trace_shade; a
- * packet of fewer than four repeats its last ray.
+ * shade_eye_ray of e[min(k, n - 1)] into u[k] and ok[k], k < 4 (a ray that
+ * cannot be traced is copied as it is, traced for nothing, never shaded).
+ * SSE2: when all four lengths and origins pass shade_eye_ray's test, its
+ * arithmetic (a square root, a division, four products) two rays at a time,
+ * the same IEEE results; any other packet goes through shade_eye_ray.
  */
-static void trace_shade4(void *arg, const struct ray e[4], const uint64_t seed[4], int n, vec3 out[4])
+static void eye_rays4(const struct ray e[4], int n, struct ray u[4], bool ok[4])
 {
-	const struct renderer *r = arg;
-	if (n < PACKET_MIN_RAYS) { /* a packet of fewer rays costs four */
-		for (int k = 0; k < n; k++)
-			out[k] = trace_shade(arg, &e[k], seed[k]);
+#if defined(__SSE2__)
+	const struct ray *q[4];
+	for (int k = 0; k < 4; k++)
+		q[k] = &e[k < n ? k : n - 1];
+	__m128d len[2], inv[2];
+	bool good = true;
+	for (int h = 0; h < 2; h++) {
+		const struct ray *a = q[2 * h], *b = q[2 * h + 1];
+		__m128d x = _mm_set_pd(b->d.x, a->d.x), y = _mm_set_pd(b->d.y, a->d.y), z = _mm_set_pd(b->d.z, a->d.z);
+		/* v3_len: sqrt((x*x + y*y) + z*z) */
+		len[h] = _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(x, x), _mm_mul_pd(y, y)), _mm_mul_pd(z, z)));
+		inv[h] = _mm_div_pd(_mm_set1_pd(1.0), len[h]);
+		/* len > 0 and finite: 0 < len < infinity (false for NaN) */
+		__m128d fine = _mm_and_pd(_mm_cmpgt_pd(len[h], _mm_setzero_pd()), _mm_cmplt_pd(len[h], _mm_set1_pd(INFINITY)));
+		good &= _mm_movemask_pd(fine) == 3 && v3_finite(a->o) && v3_finite(b->o);
+	}
+	if (good) {
+		for (int k = 0; k < 4; k++) {
+			double l, i;
+			_mm_store_sd(&l, k & 1 ? _mm_unpackhi_pd(len[k >> 1], len[k >> 1]) : len[k >> 1]);
+			_mm_store_sd(&i, k & 1 ? _mm_unpackhi_pd(inv[k >> 1], inv[k >> 1]) : inv[k >> 1]);
+			u[k] = (struct ray){ q[k]->o, v3_scale(q[k]->d, i), q[k]->tmin * l, q[k]->tmax * l };
+			ok[k] = true;
+		}
 		return;
 	}
-	struct ray u[4];
-	bool ok[4];
+#endif
 	for (int k = 0; k < 4; k++) {
-		int q = k < n ? k : n - 1;
-		ok[k] = shade_eye_ray(&e[q], &u[k]);
+		const struct ray *q1 = &e[k < n ? k : n - 1];
+		ok[k] = shade_eye_ray(q1, &u[k]);
 		if (!ok[k])
-			u[k] = e[q]; /* traced for nothing, never shaded */
+			u[k] = *q1; /* traced for nothing, never shaded */
+	}
+}
+
+/*
+ * trace_shade4 once eye_rays4 has made u and ok of e (n >= PACKET_MIN_RAYS;
+ * fewer: u and ok unused).
+ */
+static void trace_ready4(const struct renderer *r, const struct ray e[4], const struct ray u[4], const bool ok[4],
+			 const uint64_t seed[4], int n, vec3 out[4])
+{
+	if (n < PACKET_MIN_RAYS) { /* a packet of fewer rays costs four */
+		for (int k = 0; k < n; k++)
+			out[k] = trace_shade((void *)r, &e[k], seed[k]);
+		return;
 	}
 	struct hit h[4];
 	bool hit[4];
@@ -150,17 +187,19 @@ static void trace_shade4(void *arg, const struct ray e[4], const uint64_t seed[4
 }
 
 /*
- * Colours of n <= 4 pixels (px[k], py[k]) of a filter_single_ray chain:
- * their eye rays (filter_eye_ray) through trace_shade4, each what
- * filter_pixel over trace_shade gives.
+ * filter_trace4_fn over the shading engine: the colours of n <= 4 eye rays
+ * e[k], their closest hits from one accel_intersect4 and their shadow rays
+ * in packets (shade_eye_hit4), each what trace_shade gives (bit for bit).
+ * Fewer than PACKET_MIN_RAYS rays go one by one through trace_shade; a
+ * packet of fewer than four repeats its last ray.
  */
-static void eye_block(const struct renderer *r, const uint32_t px[4], const uint32_t py[4], int n, vec3 out[4])
+static void trace_shade4(void *arg, const struct ray e[4], const uint64_t seed[4], int n, vec3 out[4])
 {
-	struct ray e[4];
-	uint64_t seed[4];
-	for (int k = 0; k < n; k++)
-		filter_eye_ray(&r->fc, px[k], py[k], &e[k], &seed[k]);
-	trace_shade4((void *)r, e, seed, n, out);
+	struct ray u[4];
+	bool ok[4];
+	if (n >= PACKET_MIN_RAYS)
+		eye_rays4(e, n, u, ok);
+	trace_ready4(arg, e, u, ok, seed, n, out);
 }
 
 /* Stores a filter colour as one pixel of a type (enum render_pixel). */
@@ -189,62 +228,127 @@ static void put_rgbf32(vec3 c, uint8_t *out)
 	put_le_float(c.z, out + 8);
 }
 
-/* renderer_tile_cancellable for a filter_single_ray chain, in 2x2 blocks;
- * stops at the first block that finds the thread's cancel flag set. */
+/*
+ * A 2x2 block of a tile for a filter_single_ray chain: its n pixels inside
+ * the image, in order, where their colours go, and their eye rays
+ * (filter_eye_ray4) made ready for trace_ready4; traced there, each
+ * colour is what filter_pixel over trace_shade gives.
+ */
+struct eye_block {
+	int n;
+	uint8_t *dst[4];
+	struct ray e[4], u[4];
+	bool ok[4];
+	uint64_t seed[4];
+};
+
+/* Walk over a tile's 2x2 blocks, row by row. */
+struct block_walk {
+	const struct renderer *r;
+	struct tile_rect t;
+	const struct pixel_store *ps;
+	uint8_t *rgb;
+	uint32_t i, j; /* the next block's top-left pixel in the tile */
+};
+
+/* The next block with a pixel inside the image into b (the tile's pixels
+ * outside the image on the way written black); false at the tile's end. */
+static bool next_block(struct block_walk *w, struct eye_block *b)
+{
+	const struct renderer *r = w->r;
+	struct tile_rect t = w->t;
+	size_t bpp = w->ps->bpp;
+	while (w->j < t.h) {
+		uint32_t i = w->i, j = w->j;
+		w->i += 2;
+		if (w->i >= t.w) {
+			w->i = 0;
+			w->j += 2;
+		}
+		uint32_t px[4], py[4];
+		int n = 0;
+		for (uint32_t k = 0; k < 4; k++) {
+			uint32_t ii = i + (k & 1), jj = j + (k >> 1);
+			if (ii >= t.w || jj >= t.h)
+				continue;
+			uint64_t x = (uint64_t)t.x + ii, y = (uint64_t)t.y + jj;
+			uint8_t *p = w->rgb + ((size_t)jj * t.w + ii) * bpp;
+			if (x >= r->w || y >= r->h) {
+				memset(p, 0, bpp);
+				continue;
+			}
+			px[n] = (uint32_t)x;
+			py[n] = (uint32_t)y;
+			b->dst[n++] = p;
+		}
+		if (n == 0)
+			continue;
+		b->n = n;
+		if (n == 4) /* the whole block: its columns and rows shared */
+			filter_eye_block(&r->fc, px[0], py[0], b->e, b->seed);
+		else
+			filter_eye_ray4(&r->fc, px, py, n, b->e, b->seed);
+		if (n >= PACKET_MIN_RAYS)
+			eye_rays4(b->e, n, b->u, b->ok);
+		return true;
+	}
+	return false;
+}
+
+/*
+ * renderer_tile_cancellable for a filter_single_ray chain, in 2x2 blocks;
+ * stops at the first block that finds the thread's cancel flag set. The
+ * next block's eye rays are made before this block is traced, so their
+ * divisions and square roots run while this block's traversal does, not
+ * in front of it.
+ */
 static void tile_blocks(const struct renderer *r, struct tile_rect t, const struct pixel_store *ps, uint8_t *rgb,
 			uint64_t *rays)
 {
-	for (uint32_t j = 0; j < t.h; j += 2) {
-		for (uint32_t i = 0; i < t.w; i += 2) {
-			if (cancel_poll())
-				return;
-			uint32_t px[4], py[4];
-			uint8_t *dst[4];
-			int n = 0;
-			for (uint32_t k = 0; k < 4; k++) {
-				uint32_t ii = i + (k & 1), jj = j + (k >> 1);
-				if (ii >= t.w || jj >= t.h)
-					continue;
-				uint64_t x = (uint64_t)t.x + ii, y = (uint64_t)t.y + jj;
-				uint8_t *p = rgb + ((size_t)jj * t.w + ii) * ps->bpp;
-				if (x >= r->w || y >= r->h) {
-					memset(p, 0, ps->bpp);
-					continue;
-				}
-				px[n] = (uint32_t)x;
-				py[n] = (uint32_t)y;
-				dst[n++] = p;
-			}
-			if (n == 0)
-				continue;
-			vec3 c[4];
-			eye_block(r, px, py, n, c);
-			for (int k = 0; k < n; k++)
-				ps->put(c[k], dst[k]);
-			*rays += (uint64_t)n;
-		}
+	struct block_walk w = { r, t, ps, rgb, 0, 0 };
+	struct eye_block b[2];
+	int cur = 0;
+	bool have = next_block(&w, &b[0]);
+	while (have) {
+		if (cancel_poll())
+			return;
+		have = next_block(&w, &b[cur ^ 1]);
+		const struct eye_block *e = &b[cur];
+		vec3 c[4];
+		trace_ready4(r, e->e, e->u, e->ok, e->seed, e->n, c);
+		for (int k = 0; k < e->n; k++)
+			ps->put(c[k], e->dst[k]);
+		*rays += (uint64_t)e->n;
+		cur ^= 1;
 	}
 }
 
-/* renderer_tile_cancellable for any other chain, pixel by pixel; stops at
- * the first pixel that finds the thread's cancel flag set. */
+/* renderer_tile_cancellable for any other chain, four pixels of a row at a
+ * time (filter_pixels4: a super-sample grid's rays in packets across
+ * them); stops at the first four that find the thread's cancel flag set. */
 static void tile_pixels(const struct renderer *r, struct tile_rect t, const struct pixel_store *ps, uint8_t *rgb,
 			uint64_t *rays)
 {
 	struct filter_scratch *scratch = filter_scratch_new(&r->fc); /* NULL: no cache, same colours */
 	for (uint32_t j = 0; j < t.h; j++) {
 		uint8_t *row = rgb + (size_t)j * t.w * ps->bpp;
-		for (uint32_t i = 0; i < t.w; i++) {
+		uint64_t y = (uint64_t)t.y + j;
+		for (uint32_t i = 0; i < t.w; i += 4) {
 			if (cancel_poll())
 				goto out;
-			uint64_t x = (uint64_t)t.x + i, y = (uint64_t)t.y + j;
-			if (x >= r->w || y >= r->h) {
-				memset(row + (size_t)i * ps->bpp, 0, ps->bpp);
-				continue;
+			uint32_t m = t.w - i < 4 ? t.w - i : 4; /* pixels of the tile */
+			uint64_t x = (uint64_t)t.x + i;
+			uint32_t n = y >= r->h || x >= r->w ? 0 : r->w - x < m ? (uint32_t)(r->w - x) : m; /* in the image */
+			vec3 c[4];
+			if (n)
+				filter_pixels4(&r->fc, scratch, (uint32_t)x, (uint32_t)y, (int)n, trace_shade, trace_shade4,
+					       (void *)r, rays, c);
+			for (uint32_t k = 0; k < m; k++) {
+				if (k < n)
+					ps->put(c[k], row + (size_t)(i + k) * ps->bpp);
+				else
+					memset(row + (size_t)(i + k) * ps->bpp, 0, ps->bpp);
 			}
-			vec3 c = filter_pixel4(&r->fc, scratch, (uint32_t)x, (uint32_t)y, trace_shade, trace_shade4,
-					       (void *)r, rays);
-			ps->put(c, row + (size_t)i * ps->bpp);
 		}
 	}
 out:

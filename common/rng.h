@@ -17,11 +17,17 @@ static inline uint64_t rng_mix(uint64_t z)
 	return z ^ (z >> 31);
 }
 
-/* Seed for one pixel sample: pixel (x, y), sample index s. */
-static inline uint64_t rng_seed(uint32_t x, uint32_t y, uint32_t s)
+/* rng_seed in two steps: the sample index's part, rng_seed_s(s), which a
+ * caller may keep for the samples of many pixels, and rng_seed_at(x, y,
+ * rng_seed_s(s)) == rng_seed(x, y, s). */
+static inline uint64_t rng_seed_s(uint32_t s) { return rng_mix((uint64_t)s + 0x632be59bd9b4e019ull); }
+static inline uint64_t rng_seed_at(uint32_t x, uint32_t y, uint64_t ms)
 {
-	return rng_mix(((uint64_t)x << 32 | y) ^ rng_mix((uint64_t)s + 0x632be59bd9b4e019ull));
+	return rng_mix(((uint64_t)x << 32 | y) ^ ms);
 }
+
+/* Seed for one pixel sample: pixel (x, y), sample index s. */
+static inline uint64_t rng_seed(uint32_t x, uint32_t y, uint32_t s) { return rng_seed_at(x, y, rng_seed_s(s)); }
 
 /* Derive an independent stream from a seed and a purpose tag. */
 static inline uint64_t rng_derive(uint64_t seed, uint64_t tag) { return rng_mix(seed ^ rng_mix(tag)); }

@@ -1,5 +1,6 @@
 /* test_camera.c - the pinhole camera and thin lens (common/camera.c). */
 #include <math.h>
+#include <string.h>
 
 #include "common/camera.h"
 #include "tests/unit/check.h"
@@ -105,6 +106,53 @@ int main(void)
 		double t = v3_dot(v3_sub(focus, r.o), r.d);
 		CHECK_NEAR(v3_len(v3_sub(v3_add(r.o, v3_scale(r.d, t)), focus)), 0, 1e-9);
 		CHECK_NEAR(v3_len(r.d), 1, 1e-12);
+	}
+
+	/* cam_ray4 and cam_unit4 over cam_col and cam_row (the SSE2 paths) give
+	 * cam_ray's rays bit for bit, for n = 1..4 and positions anywhere: on
+	 * and off the film, at its edges, huge; with depth 0 the film centre's
+	 * direction is zero and stays zero, as v3_norm leaves it */
+	const double pos[] = { 0.5, 0, 1e-300, 320.75, 321, -17.25, 1e6, -3e300, 160.5, 120.5, 0.1, 240.999 };
+	const int n_pos = (int)(sizeof pos / sizeof pos[0]);
+	for (int depth0 = 0; depth0 < 2; depth0++) {
+		sc = spd_camera();
+		if (depth0)
+			sc.depth = 0;
+		CHECK(cam_init(&c, &sc, W, H) == 0);
+		for (int n = 1; n <= 4; n++)
+			for (int i = 0; i < n_pos; i++) {
+				double px[4], py[4];
+				vec3 d[4];
+				struct ray r4[4], u4[4];
+				for (int k = 0; k < n; k++) {
+					px[k] = pos[(i + k) % n_pos];
+					py[k] = pos[(i + 3 * k + 1) % n_pos];
+					d[k] = v3_add(c.vd, v3_add(cam_col(&c, px[k]), cam_row(&c, py[k])));
+				}
+				cam_ray4(&c, px, py, n, r4);
+				cam_unit4(&c, d, n, u4);
+				for (int k = 0; k < n; k++) {
+					struct ray one = cam_ray(&c, px[k], py[k]);
+					CHECK(memcmp(&one, &r4[k], sizeof one) == 0);
+					CHECK(memcmp(&one, &u4[k], sizeof one) == 0);
+				}
+			}
+		/* the film centre with depth 0: a zero direction */
+		double cx[4] = { W / 2.0 }, cy[4] = { H / 2.0 };
+		struct ray z[4];
+		cam_ray4(&c, cx, cy, 1, z);
+		CHECK(depth0 ? z[0].d.x == 0 && z[0].d.y == 0 && z[0].d.z == 0 : fabs(v3_len(z[0].d) - 1) < 1e-15);
+	}
+	/* a NaN position: NaN directions, both ways */
+	sc = spd_camera();
+	CHECK(cam_init(&c, &sc, W, H) == 0);
+	double nx[4] = { NAN, 3.5 }, ny[4] = { 2.5, NAN };
+	struct ray nr[4];
+	cam_ray4(&c, nx, ny, 2, nr);
+	for (int k = 0; k < 2; k++) {
+		struct ray one = cam_ray(&c, nx[k], ny[k]);
+		CHECK(isnan(one.d.x) && isnan(nr[k].d.x) && isnan(nr[k].d.y) && isnan(nr[k].d.z));
+		CHECK(memcmp(&one.o, &nr[k].o, sizeof one.o) == 0 && nr[k].tmin == 0 && isinf(nr[k].tmax));
 	}
 
 	/* degenerate cameras are refused */

@@ -49,6 +49,23 @@ static void trace_noisy4(void *arg, const struct ray r[4], const uint64_t seed[4
 		out[k] = trace_noisy(arg, &r[k], seed[k]);
 }
 
+/* trace_noisy four at a time, recording every ray and seed in order (rec_n of them). */
+#define REC_MAX 1024
+static struct ray rec_ray[REC_MAX];
+static uint64_t rec_seed[REC_MAX];
+static int rec_n;
+static void trace_rec4(void *arg, const struct ray r[4], const uint64_t seed[4], int n, vec3 out[4])
+{
+	for (int k = 0; k < n; k++) {
+		if (rec_n < REC_MAX) {
+			rec_ray[rec_n] = r[k];
+			rec_seed[rec_n] = seed[k];
+		}
+		rec_n++;
+		out[k] = trace_noisy(arg, &r[k], seed[k]);
+	}
+}
+
 /* filter_pixel4 over every pixel of a w x h chain (scratch per row when
  * cache) gives filter_pixel's colours bit for bit and its ray count;
  * returns the packets traced. */
@@ -382,6 +399,145 @@ int main(void)
 	c.filters[1].y_samples = 2;
 	chain(&fc, &c, 6, 5);
 	CHECK(packets_agree(&fc, 6, 5, true) > 6 * 5);
+
+	/* the packet paths against the scalar expressions they replace, bit for
+	 * bit: sample k of an xs x ys grid from pixel (x, y)'s centre is
+	 * cam_ray at (x + 0.5 + ((k % xs + 0.5) / xs - 0.5), y + 0.5 + ((k / xs +
+	 * 0.5) / ys - 0.5)) seeded rng_seed(x, y, k); the chain keeps each
+	 * offset as that expression gives it; grids wider than its table
+	 * (FILTER_GRID_TAB) compute them sample by sample */
+	static const int grids[][2] = { { 3, 3 }, { 2, 5 }, { 1, 1 }, { 4, 1 }, { 16, 16 }, { 17, 2 }, { 3, 40 } };
+	for (size_t gi = 0; gi < sizeof grids / sizeof grids[0]; gi++) {
+		int xs = grids[gi][0], ys = grids[gi][1];
+		c = base_camera();
+		add(&c, FILTER_STANDARD);
+		add(&c, FILTER_SUPERSAMPLE);
+		c.filters[1].x_samples = xs;
+		c.filters[1].y_samples = ys;
+		chain(&fc, &c, 9, 7);
+		for (int a = 0; a < xs && a < FILTER_GRID_TAB; a++) {
+			double want_dx = ((double)(uint64_t)a + 0.5) / xs - 0.5;
+			CHECK(memcmp(&want_dx, &fc.grid_dx[0][a], sizeof want_dx) == 0);
+		}
+		for (int b = 0; b < ys && b < FILTER_GRID_TAB; b++) {
+			double want_dy = ((double)(uint64_t)b + 0.5) / ys - 0.5;
+			CHECK(memcmp(&want_dy, &fc.grid_dy[0][b], sizeof want_dy) == 0);
+		}
+		for (uint32_t y = 0; y < 7; y += 3)
+			for (uint32_t x = 0; x < 9; x += 4) {
+				rec_n = 0;
+				rays = 0;
+				filter_pixel4(&fc, NULL, x, y, trace_noisy, trace_rec4, NULL, &rays);
+				CHECK(rec_n == xs * ys && rays == (uint64_t)(xs * ys) && rec_n <= REC_MAX);
+				for (int k = 0; k < rec_n && k < REC_MAX; k++) {
+					uint64_t a = (uint64_t)k % (uint64_t)xs, b = (uint64_t)k / (uint64_t)xs;
+					double sx = x + 0.5, sy = y + 0.5;
+					sx += ((double)a + 0.5) / xs - 0.5;
+					sy += ((double)b + 0.5) / ys - 0.5;
+					struct ray rk = cam_ray(&fc.cam, sx, sy);
+					CHECK(memcmp(&rk, &rec_ray[k], sizeof rk) == 0);
+					CHECK(rec_seed[k] == rng_seed(x, y, (uint32_t)k));
+				}
+			}
+	}
+	/* adaptive's corners traced four at a time: each is cam_ray at the
+	 * corner (cx / 2^depth, cy / 2^depth) seeded rng_seed(cx, cy, 0) */
+	c = base_camera();
+	add(&c, FILTER_ADAPTIVE);
+	c.filters[0].threshold = 0.01;
+	c.filters[0].max_depth = 3;
+	chain(&fc, &c, 12, 9);
+	int found = 0;
+	for (uint32_t y = 2; y < 9; y += 3)
+		for (uint32_t x = 1; x < 12; x += 5) {
+			rec_n = 0;
+			filter_pixel4(&fc, NULL, x, y, trace_noisy, trace_rec4, NULL, NULL);
+			CHECK(rec_n >= 4 && rec_n <= REC_MAX);
+			for (int k = 0; k < rec_n && k < REC_MAX; k++) {
+				bool ok = false;
+				for (uint32_t cy = y * 8; cy <= y * 8 + 8 && !ok; cy++)
+					for (uint32_t cx = x * 8; cx <= x * 8 + 8 && !ok; cx++) {
+						if (rec_seed[k] != rng_seed(cx, cy, 0))
+							continue;
+						struct ray rk = cam_ray(&fc.cam, (double)cx / 8, (double)cy / 8);
+						ok = memcmp(&rk, &rec_ray[k], sizeof rk) == 0;
+					}
+				CHECK(ok);
+				found += ok;
+			}
+		}
+	CHECK(found > 9 * 4); /* some pixels subdivided */
+	/* filter_pixels4: n = 1..4 pixels of a row, each filter_pixel's colour
+	 * bit for bit and the same rays; a grid's rays in packets of four
+	 * across the pixels (3 x 3 over 4 pixels: 9 packets), other chains
+	 * pixel by pixel */
+	for (int kind = 0; kind < 9; kind++) {
+		static const int pg[][2] = { { 3, 3 }, { 2, 2 }, { 1, 1 }, { 5, 3 }, { 16, 1 }, { 17, 2 } };
+		c = base_camera();
+		add(&c, kind == 8 ? FILTER_ADAPTIVE : FILTER_STANDARD);
+		if (kind == 6) {
+			add(&c, FILTER_LENS);
+			c.filters[1].samples = 2;
+		}
+		if (kind < 7) {
+			add(&c, FILTER_SUPERSAMPLE);
+			c.filters[c.n_filters - 1].x_samples = pg[kind % 6][0];
+			c.filters[c.n_filters - 1].y_samples = pg[kind % 6][1];
+		}
+		if (kind == 8)
+			c.filters[0].threshold = 0.05;
+		chain(&fc, &c, 11, 5);
+		for (uint32_t y = 0; y < 5; y += 2)
+			for (int n = 1; n <= 4; n++)
+				for (uint32_t x = 0; x + (uint32_t)n <= 11; x += 3) {
+					vec3 out[4];
+					uint64_t ra = 0, rb = 0;
+					n_packets = 0;
+					filter_pixels4(&fc, NULL, x, y, n, trace_noisy, trace_noisy4, NULL, &rb, out);
+					if (kind == 0)
+						CHECK(n_packets == (9 * n + 3) / 4);
+					for (int p = 0; p < n; p++) {
+						vec3 one = filter_pixel(&fc, NULL, x + (uint32_t)p, y, trace_noisy, NULL, &ra);
+						CHECK(memcmp(&one, &out[p], sizeof one) == 0);
+					}
+					CHECK(ra == rb);
+				}
+	}
+	/* filter_eye_block: filter_eye_ray's rays and seeds of a 2x2 block */
+	c = base_camera();
+	chain(&fc, &c, 41, 31);
+	for (uint32_t y = 0; y + 1 < 31; y += 3)
+		for (uint32_t x = 0; x + 1 < 41; x += 5) {
+			struct ray rb[4];
+			uint64_t sb[4];
+			filter_eye_block(&fc, x, y, rb, sb);
+			for (uint32_t k = 0; k < 4; k++) {
+				struct ray e1;
+				uint64_t s1;
+				filter_eye_ray(&fc, x + (k & 1), y + (k >> 1), &e1, &s1);
+				CHECK(memcmp(&e1, &rb[k], sizeof e1) == 0 && s1 == sb[k]);
+			}
+		}
+	/* filter_eye_ray4: filter_eye_ray's rays and seeds, n = 1..4 */
+	c = base_camera();
+	chain(&fc, &c, 40, 30);
+	for (int n = 1; n <= 4; n++)
+		for (uint32_t y = 0; y < 30; y += 7) {
+			uint32_t ex[4], ey[4];
+			struct ray r4[4];
+			uint64_t s4[4];
+			for (int k = 0; k < n; k++) {
+				ex[k] = (y * 3 + (uint32_t)k * 11) % 40;
+				ey[k] = (y + (uint32_t)k) % 30;
+			}
+			filter_eye_ray4(&fc, ex, ey, n, r4, s4);
+			for (int k = 0; k < n; k++) {
+				struct ray e1;
+				uint64_t s1;
+				filter_eye_ray(&fc, ex[k], ey[k], &e1, &s1);
+				CHECK(memcmp(&e1, &r4[k], sizeof e1) == 0 && s1 == s4[k]);
+			}
+		}
 
 	TEST_MAIN_END();
 }
