@@ -368,9 +368,18 @@ static double frac(double x) { return x - floor(x); }
 /*
  * p moved off the surface with geometric normal ng to the side dir points
  * to, so a secondary ray from there (tmin = 0) cannot hit the surface it
- * starts on (no acne): the geometry's accel_offset_point.
+ * starts on (no acne): accel_offset_point (accel.h), bit for bit, inline
+ * (a call passes the three vectors through the stack). test_shade_offset
+ * compares the two.
  */
-static vec3 offset(vec3 p, vec3 ng, vec3 dir) { return accel_offset_point(p, ng, dir); }
+static inline vec3 offset(vec3 p, vec3 ng, vec3 dir)
+{
+	double ax = fabs(p.x), ay = fabs(p.y), az = fabs(p.z);
+	double m = ay > az || az != az ? ay : az; /* fmax, NaN as the library's */
+	m = ax > m || m != m ? ax : m;
+	double e = 1e-9 * (1 + m);
+	return v3_add(p, v3_scale(ng, v3_dot(dir, ng) < 0 ? -e : e));
+}
 
 /*
  * Sample k of n on a light: a point light's position, or a point on the
@@ -589,7 +598,8 @@ static vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, c
 			}
 			sum = v3_add(sum, term);
 		}
-		col = v3_add(col, v3_scale(sum, 1.0 / n_samples));
+		/* sum x 1.0 is sum, bit for bit: a point light skips the division */
+		col = v3_add(col, point ? sum : v3_scale(sum, 1.0 / n_samples));
 	}
 	return col;
 }
@@ -670,39 +680,39 @@ static vec3 trace_hit(const struct shade_ctx *c, const struct ray *r, const stru
 static vec3 surf_shade(const struct shade_ctx *c, const struct ray *r, const struct surf *sf, int depth,
 		       double weight, uint64_t seed, const struct shadow_pre *pre)
 {
-	const struct hit h = sf->h;
-	const struct shader_mat m = sf->m;
+	const struct hit *h = &sf->h;
+	const struct shader_mat *m = &sf->m;
 	vec3 d = r->d;
 	bool entering = sf->entering;
 	vec3 ng = sf->ng, n = sf->n;
 	vec3 v = v3_neg(d);
 	double td = sf->td;
 
-	vec3 col = direct(c, h.p, n, ng, v, &m, m.diffuse * (1 - td), weight, seed, pre);
+	vec3 col = direct(c, h->p, n, ng, v, m, m->diffuse * (1 - td), weight, seed, pre);
 
 	if (depth >= LIM_TRACE_DEPTH)
 		return col;
 	bool reflections = !c->s->image.no_reflections;
 
 	/* mirror reflection */
-	if (reflections && m.reflection > 0) {
-		vec3 k = v3_scale(m.spec_colour, m.reflection);
+	if (reflections && m->reflection > 0) {
+		vec3 k = v3_scale(m->spec_colour, m->reflection);
 		double w = weight * maxc(k);
 		if (w >= SHADE_MIN_WEIGHT) {
 			vec3 rd = reflect(d, n);
 			if (v3_dot(rd, ng) <= 0) /* a perturbed normal sent it into the surface */
 				rd = reflect(d, ng);
-			vec3 rc = trace_from(c, offset(h.p, ng, rd), rd, depth + 1, w, rng_derive(seed, TAG_REFLECT));
+			vec3 rc = trace_from(c, offset(h->p, ng, rd), rd, depth + 1, w, rng_derive(seed, TAG_REFLECT));
 			col = v3_add(col, v3_mul(k, rc));
 		}
 	}
 
 	/* transparency: refraction, or total internal reflection */
 	if (td > 0) {
-		vec3 k = v3_scale(v3_max(m.tran_colour, v3(0, 0, 0)), td);
+		vec3 k = v3_scale(v3_max(m->tran_colour, v3(0, 0, 0)), td);
 		double w = weight * maxc(k);
 		if (w >= SHADE_MIN_WEIGHT) {
-			double eta = entering ? 1 / m.ior : m.ior;
+			double eta = entering ? 1 / m->ior : m->ior;
 			double cosi = -v3_dot(n, d);
 			double k2 = 1 - eta * eta * (1 - cosi * cosi);
 			vec3 nd;
@@ -715,7 +725,7 @@ static vec3 surf_shade(const struct shade_ctx *c, const struct ray *r, const str
 					nd = d;
 			}
 			if (!tir || reflections) {
-				vec3 tc = trace_from(c, offset(h.p, ng, nd), nd, depth + 1, w, rng_derive(seed, TAG_REFRACT));
+				vec3 tc = trace_from(c, offset(h->p, ng, nd), nd, depth + 1, w, rng_derive(seed, TAG_REFRACT));
 				col = v3_add(col, v3_mul(k, tc));
 			}
 		}
