@@ -43,6 +43,10 @@ struct shade_light {
 	double area[3], total_area;
 };
 
+/* Boxes around the surfaces that may be transparent (TRANSPARENT BOXES):
+ * at most this many, one per material, the last one taking the rest. */
+#define SHADE_TBOXES 8
+
 struct shade_ctx {
 	const struct scene *s;
 	const struct accel *a;
@@ -50,6 +54,13 @@ struct shade_ctx {
 	uint32_t n_lights;
 	double total_samples; /* light samples per shading point, all lights (>= 1) */
 	bool any_transparent; /* some material has transparency > 0 */
+	/* TRANSPARENT BOXES: when tbox_all, every surface whose material may be
+	 * transparent lies inside one of tbox[0 .. n_tbox-1] */
+	bool tbox_all;
+	uint32_t n_tbox;
+	struct {
+		vec3 c, e; /* centre and half-size */
+	} tbox[SHADE_TBOXES];
 };
 
 /*
@@ -89,9 +100,16 @@ static uint32_t *light_hint(const struct shade_ctx *c, uint32_t i)
  * with direct()'s and transmittance()'s arithmetic, so the same answer.
  */
 #define SHADE_PRE_LIGHTS 32
+/* In scenes with transparent materials, the first closest hits of the
+ * shadow rays toward the first SHADE_PRE_TLIGHTS point lights
+ * (accel_intersect4); transmittance() goes on from there. */
+#define SHADE_PRE_TLIGHTS 8
 struct shadow_pre {
 	uint32_t known; /* bit i: light i's shadow ray from this hit was traced */
 	uint32_t occ;   /* bit i: ... and it was blocked */
+	uint32_t tknown; /* transparent scenes: bit i: first[i] (or a miss) is known */
+	uint32_t thit;   /* bit i: ... and it is a hit */
+	struct hit *first; /* [SHADE_PRE_TLIGHTS]: the hits (NULL when tknown is 0) */
 };
 
 /* Two unit vectors perpendicular to unit axis a and to each other. */
@@ -100,6 +118,196 @@ static void frame(vec3 a, vec3 *e1, vec3 *e2)
 	vec3 t = fabs(a.x) < 0.9 ? v3(1, 0, 0) : v3(0, 1, 0);
 	*e1 = v3_norm(v3_cross(a, t));
 	*e2 = v3_cross(a, *e1);
+}
+
+/* Largest channel (plain comparisons: fmax is a library call at -O2). */
+static inline double max3(double a, double b, double c)
+{
+	double m = a > b ? a : b;
+	return m > c ? m : c;
+}
+static double maxc(vec3 a) { return max3(a.x, a.y, a.z); }
+static double maxabs(vec3 a) { return max3(fabs(a.x), fabs(a.y), fabs(a.z)); }
+
+/*
+ * TRANSPARENT BOXES. In a scene with transparent materials a shadow ray
+ * needs its closest hit (transmittance): a transparent surface in front
+ * lets light through, an opaque one does not. But a segment that meets no
+ * surface whose material may be transparent has only opaque hits, so its
+ * closest hit, if any, is opaque: its transmittance is then 0 exactly when
+ * accel_occluded says "occluded" (anything hit in (tmin, tmax) blocks),
+ * and what came through so far otherwise: the answer of the cheaper
+ * any-hit query, or of a packet.
+ *
+ * tbox_boxes puts a box around the root objects whose resolved material
+ * may be transparent (transparency > 0 or NaN, or a shader, whose pattern
+ * may pick or blend in a transparent material): one box per material,
+ * SHADE_TBOXES at most. Only triangles and RAW meshes get a box: their
+ * watertight test accepts a line only within a few rounding errors of the
+ * triangle, relative to the vertices' and the origin's coordinates, and the
+ * boxes' margins (TBOX_MARGIN of the box's largest coordinate, TBOX_DYN of
+ * the ray's origin and direction, added at each test) are far above that.
+ * A root that may show a transparent surface but gets no box (another
+ * primitive, a plane, CSG or an instance holding a possibly transparent
+ * material) turns the shortcut off (tbox_all false). The margins are below
+ * accel_offset_point's 1e-9, so that a ray leaving a transparent mesh
+ * through its outer face gets out of its box.
+ */
+#define TBOX_MARGIN 0x1p-32
+#define TBOX_DYN 0x1p-40
+/* Objects looked at below CSG and instance roots before giving up (the
+ * shortcut is then off): bounds shade_ctx_new's time. */
+#define TBOX_BUDGET 1000000
+
+/* Whether material index mi (SCENE_NONE or out of range: the default
+ * material) may give a transparent surface. */
+static bool mat_maybe_transparent(const struct scene *s, uint32_t mi)
+{
+	const struct scene_material *m = mi < s->n_materials ? &s->materials[mi] : scene_default_material();
+	return !(m->transparency <= 0) || m->shader.kind != SHADER_NONE;
+}
+
+/*
+ * Whether object oi or anything below it (CSG operands, a define's
+ * members) names a material that may be transparent; true as well when
+ * *budget runs out. Members without a material take their parent's, which
+ * the caller has looked at.
+ */
+static bool subtree_maybe_transparent(const struct scene *s, uint32_t oi, long *budget, int depth)
+{
+	if (--*budget < 0 || depth > LIM_DEFINE_DEPTH + LIM_CSG_DEPTH || oi >= s->n_objects)
+		return true;
+	struct scene_object tmp;
+	const struct scene_object *o = scene_object(s, oi, &tmp);
+	if (o->material != SCENE_NONE && mat_maybe_transparent(s, o->material))
+		return true;
+	if (o->kind == PRIM_CSG)
+		return subtree_maybe_transparent(s, o->u.csg.operand1, budget, depth + 1) ||
+		       subtree_maybe_transparent(s, o->u.csg.operand2, budget, depth + 1);
+	if (o->kind == PRIM_INSTANCE) {
+		if (o->u.instance.define >= s->n_defines)
+			return true;
+		const struct scene_define *d = &s->defines[o->u.instance.define];
+		for (uint32_t k = 0; k < d->n_objects; k++)
+			if (subtree_maybe_transparent(s, d->objects[k], budget, depth + 1))
+				return true;
+	}
+	return false;
+}
+
+/* Grows box (lo, hi) by vertex p, transformed as accel_build bakes it. */
+static void box_add(const struct scene_object *o, vec3 p, vec3 *lo, vec3 *hi)
+{
+	if (o->has_xform)
+		p = m34_point(&o->xform, p);
+	*lo = v3(p.x < lo->x ? p.x : lo->x, p.y < lo->y ? p.y : lo->y, p.z < lo->z ? p.z : lo->z);
+	*hi = v3(p.x > hi->x ? p.x : hi->x, p.y > hi->y ? p.y : hi->y, p.z > hi->z ? p.z : hi->z);
+}
+
+/* World box of root object o, a triangle or RAW mesh, margin included:
+ * false when it has none (another kind, or not finite). */
+static bool root_box(const struct scene *s, const struct scene_object *o, vec3 *lo, vec3 *hi)
+{
+	*lo = v3(INFINITY, INFINITY, INFINITY);
+	*hi = v3(-INFINITY, -INFINITY, -INFINITY);
+	if (o->kind == PRIM_TRIANGLE) {
+		box_add(o, o->u.triangle.a, lo, hi);
+		box_add(o, o->u.triangle.b, lo, hi);
+		box_add(o, o->u.triangle.c, lo, hi);
+	} else if (o->kind == PRIM_RAW && o->u.raw.mesh < s->n_meshes) {
+		const struct scene_mesh *m = &s->meshes[o->u.raw.mesh];
+		for (uint32_t k = 0; k < m->n_vertices; k++)
+			box_add(o, m->vertices[k], lo, hi);
+	} else {
+		return false;
+	}
+	double big = max3(maxabs(*lo), maxabs(*hi), 0);
+	if (!(big < 0x1p900))
+		return false; /* infinite, NaN, empty or too large for the margins */
+	double e = big * TBOX_MARGIN + 0x1p-900;
+	*lo = v3_sub(*lo, v3(e, e, e));
+	*hi = v3_add(*hi, v3(e, e, e));
+	return true;
+}
+
+/* Fills c's TRANSPARENT BOXES (c->s set, c->any_transparent known). */
+static void tbox_boxes(struct shade_ctx *c)
+{
+	const struct scene *s = c->s;
+	c->n_tbox = 0;
+	c->tbox_all = false;
+	if (!c->any_transparent || mat_maybe_transparent(s, SCENE_NONE))
+		return;
+	vec3 lo[SHADE_TBOXES], hi[SHADE_TBOXES];
+	uint32_t mat[SHADE_TBOXES];
+	long budget = TBOX_BUDGET;
+	for (uint32_t k = 0; k < s->n_roots; k++) {
+		uint32_t oi = s->roots[k];
+		if (oi >= s->n_objects)
+			return;
+		struct scene_object tmp;
+		const struct scene_object *o = scene_object(s, oi, &tmp);
+		if (o->kind == PRIM_CSG || o->kind == PRIM_INSTANCE) {
+			if (subtree_maybe_transparent(s, oi, &budget, 0))
+				return;
+			continue;
+		}
+		if (!mat_maybe_transparent(s, o->material))
+			continue;
+		vec3 l, h;
+		if (!root_box(s, o, &l, &h))
+			return;
+		uint32_t j = 0;
+		while (j < c->n_tbox && mat[j] != o->material && j < SHADE_TBOXES - 1)
+			j++;
+		if (j == c->n_tbox) {
+			mat[j] = o->material;
+			lo[j] = l;
+			hi[j] = h;
+			c->n_tbox++;
+		} else {
+			lo[j] = v3_min(lo[j], l);
+			hi[j] = v3_max(hi[j], h);
+		}
+	}
+	for (uint32_t j = 0; j < c->n_tbox; j++) { /* centre and half-size, rounding covered */
+		double big = max3(maxabs(lo[j]), maxabs(hi[j]), 0);
+		c->tbox[j].c = v3_scale(v3_add(lo[j], hi[j]), 0.5);
+		c->tbox[j].e = v3_add(v3_scale(v3_sub(hi[j], lo[j]), 0.5), v3(big * TBOX_DYN, big * TBOX_DYN, big * TBOX_DYN));
+	}
+	c->tbox_all = true;
+}
+
+/*
+ * Whether the segment of shadow ray r (t in [0, 1]) may meet a surface
+ * whose material may be transparent: false only when it provably does
+ * not. The separating-axis test of a segment and a box (the box's three
+ * axes, and the segment's direction crossed with each), with r's rounding
+ * margin added to the boxes.
+ */
+static bool may_cross_transparent(const struct shade_ctx *c, const struct ray *r)
+{
+	if (!c->tbox_all)
+		return true;
+	vec3 h = v3_scale(r->d, 0.5), q = v3_add(r->o, h); /* half the segment, its middle */
+	double ax = fabs(h.x), ay = fabs(h.y), az = fabs(h.z);
+	double mu = TBOX_DYN * (maxabs(r->o) + 2 * max3(ax, ay, az)) + 0x1p-900;
+	if (!(mu < 0x1p-60 * 0x1p900))
+		return true; /* NaN, infinite, or large enough to overflow below */
+	for (uint32_t j = 0; j < c->n_tbox; j++) {
+		vec3 m = v3_sub(q, c->tbox[j].c);
+		double ex = c->tbox[j].e.x + mu, ey = c->tbox[j].e.y + mu, ez = c->tbox[j].e.z + mu;
+		if (fabs(m.x) > ex + ax || fabs(m.y) > ey + ay || fabs(m.z) > ez + az)
+			continue;
+		if (fabs(m.y * h.z - m.z * h.y) > ey * az + ez * ay)
+			continue;
+		if (fabs(m.z * h.x - m.x * h.z) > ex * az + ez * ax)
+			continue;
+		if (fabs(m.x * h.y - m.y * h.x) > ex * ay + ey * ax)
+			continue;
+		return true;
+	}
+	return false;
 }
 
 int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx **out,
@@ -138,6 +346,7 @@ int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx
 	for (uint32_t i = 0; i < s->n_materials; i++)
 		if (s->materials[i].transparency > 0)
 			c->any_transparent = true;
+	tbox_boxes(c);
 	*out = c;
 	return 0;
 oom:
@@ -153,23 +362,24 @@ void shade_ctx_free(struct shade_ctx *c)
 	free(c);
 }
 
-/* Largest channel (plain comparisons: fmax is a library call at -O2). */
-static inline double max3(double a, double b, double c)
-{
-	double m = a > b ? a : b;
-	return m > c ? m : c;
-}
-static double maxc(vec3 a) { return max3(a.x, a.y, a.z); }
-static double maxabs(vec3 a) { return max3(fabs(a.x), fabs(a.y), fabs(a.z)); }
 
 static double frac(double x) { return x - floor(x); }
 
 /*
  * p moved off the surface with geometric normal ng to the side dir points
  * to, so a secondary ray from there (tmin = 0) cannot hit the surface it
- * starts on (no acne): the geometry's accel_offset_point.
+ * starts on (no acne): accel_offset_point (accel.h), bit for bit, inline
+ * (a call passes the three vectors through the stack). test_shade_offset
+ * compares the two.
  */
-static vec3 offset(vec3 p, vec3 ng, vec3 dir) { return accel_offset_point(p, ng, dir); }
+static inline vec3 offset(vec3 p, vec3 ng, vec3 dir)
+{
+	double ax = fabs(p.x), ay = fabs(p.y), az = fabs(p.z);
+	double m = ay > az || az != az ? ay : az; /* fmax, NaN as the library's */
+	m = ax > m || m != m ? ax : m;
+	double e = 1e-9 * (1 + m);
+	return v3_add(p, v3_scale(ng, v3_dot(dir, ng) < 0 ? -e : e));
+}
 
 /*
  * Sample k of n on a light: a point light's position, or a point on the
@@ -246,18 +456,27 @@ static void need_surface(const struct shade_ctx *c, struct hit *h)
  * the way, 0 when something opaque is; each transparent surface crossed
  * multiplies it by transparency x tran-colour.
  */
-static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp, uint32_t light)
+static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp, uint32_t light, const struct shadow_pre *pre)
 {
 	struct ray r = { o, v3_sub(lp, o), 0, 1 };
 	if (!c->any_transparent)
 		return accel_occluded_hint(c->a, &r, light_hint(c, light)) ? v3(0, 0, 0) : v3(1, 1, 1);
+	bool first_known = pre && light < SHADE_PRE_TLIGHTS && (pre->tknown >> light & 1);
+	const struct hit *first = first_known && (pre->thit >> light & 1) ? &pre->first[light] : NULL;
 	vec3 t = v3(1, 1, 1);
 	for (int i = 0; i < LIM_SHADOW_HITS; i++) {
 		if (i && cancel_poll()) /* CANCELLATION: shaders may be costly */
 			return v3(0, 0, 0);
 		struct hit h;
-		if (!accel_intersect(c->a, &r, &h))
+		if (i == 0 && first_known) { /* the ray's closest hit from a packet */
+			if (!first)
+				return t;
+			h = *first;
+		} else if (!may_cross_transparent(c, &r)) { /* TRANSPARENT BOXES */
+			return accel_occluded_hint(c->a, &r, light_hint(c, light)) ? v3(0, 0, 0) : t;
+		} else if (!accel_intersect(c->a, &r, &h)) {
 			return t;
+		}
 		need_surface(c, &h);
 		struct shader_point pt = { h.mp, h.u, h.v, h.n };
 		struct shader_mat m;
@@ -371,7 +590,7 @@ static vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, c
 					if (pre->occ >> i & 1)
 						continue;
 				} else {
-					vec3 t = transmittance(c, offset(p, ng, ldir), lp, i);
+					vec3 t = transmittance(c, offset(p, ng, ldir), lp, i, pre);
 					if (maxc(t) <= 0)
 						continue;
 					term = v3_mul(term, t);
@@ -379,7 +598,8 @@ static vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, c
 			}
 			sum = v3_add(sum, term);
 		}
-		col = v3_add(col, v3_scale(sum, 1.0 / n_samples));
+		/* sum x 1.0 is sum, bit for bit: a point light skips the division */
+		col = v3_add(col, point ? sum : v3_scale(sum, 1.0 / n_samples));
 	}
 	return col;
 }
@@ -460,39 +680,39 @@ static vec3 trace_hit(const struct shade_ctx *c, const struct ray *r, const stru
 static vec3 surf_shade(const struct shade_ctx *c, const struct ray *r, const struct surf *sf, int depth,
 		       double weight, uint64_t seed, const struct shadow_pre *pre)
 {
-	const struct hit h = sf->h;
-	const struct shader_mat m = sf->m;
+	const struct hit *h = &sf->h;
+	const struct shader_mat *m = &sf->m;
 	vec3 d = r->d;
 	bool entering = sf->entering;
 	vec3 ng = sf->ng, n = sf->n;
 	vec3 v = v3_neg(d);
 	double td = sf->td;
 
-	vec3 col = direct(c, h.p, n, ng, v, &m, m.diffuse * (1 - td), weight, seed, pre);
+	vec3 col = direct(c, h->p, n, ng, v, m, m->diffuse * (1 - td), weight, seed, pre);
 
 	if (depth >= LIM_TRACE_DEPTH)
 		return col;
 	bool reflections = !c->s->image.no_reflections;
 
 	/* mirror reflection */
-	if (reflections && m.reflection > 0) {
-		vec3 k = v3_scale(m.spec_colour, m.reflection);
+	if (reflections && m->reflection > 0) {
+		vec3 k = v3_scale(m->spec_colour, m->reflection);
 		double w = weight * maxc(k);
 		if (w >= SHADE_MIN_WEIGHT) {
 			vec3 rd = reflect(d, n);
 			if (v3_dot(rd, ng) <= 0) /* a perturbed normal sent it into the surface */
 				rd = reflect(d, ng);
-			vec3 rc = trace_from(c, offset(h.p, ng, rd), rd, depth + 1, w, rng_derive(seed, TAG_REFLECT));
+			vec3 rc = trace_from(c, offset(h->p, ng, rd), rd, depth + 1, w, rng_derive(seed, TAG_REFLECT));
 			col = v3_add(col, v3_mul(k, rc));
 		}
 	}
 
 	/* transparency: refraction, or total internal reflection */
 	if (td > 0) {
-		vec3 k = v3_scale(v3_max(m.tran_colour, v3(0, 0, 0)), td);
+		vec3 k = v3_scale(v3_max(m->tran_colour, v3(0, 0, 0)), td);
 		double w = weight * maxc(k);
 		if (w >= SHADE_MIN_WEIGHT) {
-			double eta = entering ? 1 / m.ior : m.ior;
+			double eta = entering ? 1 / m->ior : m->ior;
 			double cosi = -v3_dot(n, d);
 			double k2 = 1 - eta * eta * (1 - cosi * cosi);
 			vec3 nd;
@@ -505,7 +725,7 @@ static vec3 surf_shade(const struct shade_ctx *c, const struct ray *r, const str
 					nd = d;
 			}
 			if (!tir || reflections) {
-				vec3 tc = trace_from(c, offset(h.p, ng, nd), nd, depth + 1, w, rng_derive(seed, TAG_REFRACT));
+				vec3 tc = trace_from(c, offset(h->p, ng, nd), nd, depth + 1, w, rng_derive(seed, TAG_REFRACT));
 				col = v3_add(col, v3_mul(k, tc));
 			}
 		}
@@ -532,40 +752,56 @@ vec3 shade_eye_hit(const struct shade_ctx *c, const struct ray *u, const struct 
  * prepared hit (ok[k]) toward each of the first SHADE_PRE_LIGHTS point
  * lights, four at a time, into pre[k]. A ray is built exactly as direct()
  * and transmittance() build it and only where direct() gets as far as
- * tracing it but for its cut-off test (so rarely for nothing); scenes with
- * transparent materials are left to direct(), whose shadow rays look
- * through them.
+ * tracing it but for its cut-off test (so rarely for nothing). Scenes with
+ * transparent materials go through shadow_packets_transparent below.
  */
+/* The octant of direction d (its sign bits), as the packets group rays. */
+static unsigned octant(vec3 d)
+{
+	return (unsigned)!!signbit(d.x) | (unsigned)!!signbit(d.y) << 1 | (unsigned)!!signbit(d.z) << 2;
+}
+
+/* The shadow rays r[0 .. m-1] toward point lp from the prepared hits
+ * (ok[k]) that direct() traces, hit who[j] for ray j; returns m. */
+static inline int block_rays(const struct surf sf[4], const bool ok[4], int n, vec3 lp,
+			     struct ray r[4], int who[4])
+{
+	int m = 0;
+	for (int k = 0; k < n; k++) {
+		if (!ok[k])
+			continue;
+		vec3 p = sf[k].h.p;
+		vec3 to = v3_sub(lp, p); /* direct()'s arithmetic */
+		double dist = v3_len(to);
+		if (!(dist > 0))
+			continue;
+		vec3 ldir = v3_scale(to, 1 / dist);
+		if (v3_dot(sf[k].n, ldir) <= 0)
+			continue;
+		vec3 o = offset(p, sf[k].ng, ldir);
+		r[m] = (struct ray){ o, v3_sub(lp, o), 0, 1 }; /* transmittance()'s */
+		who[m++] = k;
+	}
+	return m;
+}
+
 static void shadow_packets(const struct shade_ctx *c, const struct surf sf[4], const bool ok[4], int n,
 			   struct shadow_pre pre[4])
 {
-	for (int k = 0; k < 4; k++)
-		pre[k].known = pre[k].occ = 0;
-	if (c->s->image.no_shadows || c->any_transparent)
+	for (int k = 0; k < 4; k++) {
+		pre[k].known = pre[k].occ = pre[k].tknown = pre[k].thit = 0;
+		pre[k].first = NULL;
+	}
+	if (c->s->image.no_shadows)
 		return;
 	uint32_t n_lights = c->n_lights < SHADE_PRE_LIGHTS ? c->n_lights : SHADE_PRE_LIGHTS;
 	for (uint32_t i = 0; i < n_lights; i++) {
 		const struct scene_light *l = c->lights[i].l;
 		if (l->shape != LIGHT_POINT || l->no_shadows)
 			continue;
-		vec3 lp = l->position;
 		struct ray r[4];
-		int who[4], m = 0;
-		for (int k = 0; k < n; k++) {
-			if (!ok[k])
-				continue;
-			vec3 p = sf[k].h.p;
-			vec3 to = v3_sub(lp, p); /* direct()'s arithmetic */
-			double dist = v3_len(to);
-			if (!(dist > 0))
-				continue;
-			vec3 ldir = v3_scale(to, 1 / dist);
-			if (v3_dot(sf[k].n, ldir) <= 0)
-				continue;
-			vec3 o = offset(p, sf[k].ng, ldir);
-			r[m] = (struct ray){ o, v3_sub(lp, o), 0, 1 }; /* transmittance()'s */
-			who[m++] = k;
-		}
+		int who[4];
+		int m = block_rays(sf, ok, n, l->position, r, who);
 		if (!m)
 			continue;
 		for (int j = m; j < 4; j++)
@@ -579,9 +815,94 @@ static void shadow_packets(const struct shade_ctx *c, const struct surf sf[4], c
 	}
 }
 
+/*
+ * shadow_packets in a scene with transparent materials (TRANSPARENT
+ * BOXES): a block whose rays toward a light all miss the boxes is traced
+ * with accel_occluded4 as above; one where some ray may cross a
+ * transparent surface, with accel_intersect4 for its closest hits when it
+ * is a whole packet of one octant (transmittance() goes on from them), and
+ * otherwise the rays that miss the boxes alone, the others left to
+ * direct().
+ */
+static void shadow_packets_transparent(const struct shade_ctx *c, const struct surf sf[4], const bool ok[4], int n,
+				       struct shadow_pre pre[4])
+{
+	for (int k = 0; k < 4; k++)
+		pre[k].known = pre[k].occ = pre[k].tknown = pre[k].thit = 0;
+	if (c->s->image.no_shadows)
+		return;
+	uint32_t n_lights = c->n_lights < SHADE_PRE_LIGHTS ? c->n_lights : SHADE_PRE_LIGHTS;
+	for (uint32_t i = 0; i < n_lights; i++) {
+		const struct scene_light *l = c->lights[i].l;
+		if (l->shape != LIGHT_POINT || l->no_shadows)
+			continue;
+		struct ray r[4];
+		int who[4];
+		int m = block_rays(sf, ok, n, l->position, r, who);
+		bool cross[4];
+		int n_cross = 0;
+		for (int j = 0; j < m; j++)
+			n_cross += cross[j] = may_cross_transparent(c, &r[j]);
+		if (n_cross && m == 4 && i < SHADE_PRE_TLIGHTS && octant(r[1].d) == octant(r[0].d) &&
+		    octant(r[2].d) == octant(r[0].d) && octant(r[3].d) == octant(r[0].d)) {
+			struct hit hh[4]; /* closest hits, a whole packet of one octant */
+			bool hit[4];
+			accel_intersect4(c->a, r, hh, hit);
+			for (int j = 0; j < 4; j++) {
+				pre[who[j]].tknown |= 1u << i;
+				if (hit[j]) {
+					pre[who[j]].thit |= 1u << i;
+					pre[who[j]].first[i] = hh[j];
+				}
+			}
+			continue;
+		}
+		int q = 0; /* those that cross are left to direct() */
+		for (int j = 0; j < m; j++)
+			if (!cross[j]) {
+				r[q] = r[j];
+				who[q++] = who[j];
+			}
+		m = q;
+		if (!m)
+			continue;
+		for (int j = m; j < 4; j++)
+			r[j] = r[m - 1];
+		bool occ[4];
+		accel_occluded4(c->a, r, occ, light_hint(c, i));
+		for (int j = 0; j < m; j++) {
+			pre[who[j]].known |= 1u << i;
+			pre[who[j]].occ |= (uint32_t)occ[j] << i;
+		}
+	}
+}
+
+/* shade_eye_hit4 in a scene with transparent materials: room for the
+ * shadow rays' first hits. */
+static __attribute__((noinline)) void eye_hit4_transparent(const struct shade_ctx *c, const struct ray u[4],
+							    const struct hit *h[4], const uint64_t seed[4], int n,
+							    vec3 out[4])
+{
+	struct surf sf[4];
+	bool ok[4] = { false, false, false, false };
+	for (int k = 0; k < n; k++)
+		ok[k] = h[k] && surf_prepare(c, &u[k], h[k], &sf[k]);
+	struct shadow_pre pre[4];
+	struct hit first[4][SHADE_PRE_TLIGHTS];
+	for (int k = 0; k < 4; k++)
+		pre[k].first = first[k];
+	shadow_packets_transparent(c, sf, ok, n, pre);
+	for (int k = 0; k < n; k++)
+		out[k] = ok[k] ? surf_shade(c, &u[k], &sf[k], 0, 1.0, seed[k], &pre[k]) : v3(0, 0, 0);
+}
+
 void shade_eye_hit4(const struct shade_ctx *c, const struct ray u[4], const struct hit *h[4],
 		    const uint64_t seed[4], int n, vec3 out[4])
 {
+	if (c->any_transparent) {
+		eye_hit4_transparent(c, u, h, seed, n, out);
+		return;
+	}
 	struct surf sf[4];
 	bool ok[4] = { false, false, false, false };
 	for (int k = 0; k < n; k++)

@@ -117,6 +117,13 @@ void accel_occluded4(const struct accel *a, const struct ray r[4], bool occ[4], 
 		occ[i] = accel_occluded_hint(a, &r[i], hint);
 }
 
+/* Four closest hits, one by one (accel.h: the same as accel_intersect). */
+void accel_intersect4(const struct accel *a, const struct ray r[4], struct hit h[4], bool hit[4])
+{
+	for (int i = 0; i < 4; i++)
+		hit[i] = accel_intersect(a, &r[i], &h[i]);
+}
+
 /* The same offset as the real accel's (accel.h). */
 vec3 accel_offset_point(vec3 p, vec3 ng, vec3 dir)
 {
@@ -127,21 +134,46 @@ vec3 accel_offset_point(vec3 p, vec3 ng, vec3 dir)
 /* ---- helpers ----------------------------------------------------------------- */
 
 static struct accel A;
+static struct scene *cur; /* the scene new_scene made last */
+
+/* The mock's primitive as a root object of the scene as well: shading
+ * reads the scene's objects (shade.c, TRANSPARENT BOXES), which must be
+ * what its accel was built from. */
+static void add_root(enum prim_kind kind, vec3 c, double r, vec3 n, uint32_t mat)
+{
+	struct scene_object o;
+	struct scene_error err;
+	uint32_t id;
+	scene_object_defaults(&o, kind);
+	if (kind == PRIM_SPHERE) {
+		o.u.sphere.centre = c;
+		o.u.sphere.radius = r;
+	} else {
+		o.u.plane.position = c;
+		o.u.plane.normal = n;
+	}
+	o.material = mat;
+	CHECK(scene_add_object(cur, &o, &id, &err) == 0);
+	CHECK(scene_add_root(cur, id, &err) == 0);
+}
 
 static void add_sphere(vec3 c, double r, uint32_t mat)
 {
 	A.p[A.n++] = (struct mock_prim){ MOCK_SPHERE, c, r, v3(0, 0, 0), mat };
+	add_root(PRIM_SPHERE, c, r, v3(0, 0, 0), mat);
 }
 
 static void add_plane(vec3 c, vec3 n, uint32_t mat)
 {
 	A.p[A.n++] = (struct mock_prim){ MOCK_PLANE, c, 0, v3_norm(n), mat };
+	add_root(PRIM_PLANE, c, 0, n, mat);
 }
 
 static struct scene *new_scene(void)
 {
 	A.n = 0;
-	return scene_new();
+	cur = scene_new();
+	return cur;
 }
 
 static uint32_t add_mat(struct scene *s, struct scene_material *m)

@@ -1,0 +1,192 @@
+/*
+ * test_shade_inner.c - shading's internal shortcuts against the real
+ * geometry (common/shade.c is included, so its static functions are
+ * reachable; the accel is the real one, from the library):
+ * - offset() is accel_offset_point, bit for bit (shade.c inlines it);
+ * - TRANSPARENT BOXES: a shadow segment that may_cross_transparent says
+ *   meets no possibly transparent surface is hit by none (accel_occluded
+ *   on a scene of transparent triangles only), for random segments and
+ *   for segments that start on a triangle, end on one or graze an edge.
+ */
+#include "common/shade.c"
+
+#include <string.h>
+
+#include "tests/unit/check.h"
+
+static uint64_t rs = 0x9e3779b97f4a7c15ull;
+
+/* Uniform in [0, 1) (xorshift). */
+static double rnd(void)
+{
+	rs ^= rs << 13;
+	rs ^= rs >> 7;
+	rs ^= rs << 17;
+	return (double)(rs >> 11) * 0x1p-53;
+}
+
+static double rnd_in(double lo, double hi) { return lo + (hi - lo) * rnd(); }
+static vec3 rnd_v(double lo, double hi) { return v3(rnd_in(lo, hi), rnd_in(lo, hi), rnd_in(lo, hi)); }
+
+/* offset() against accel_offset_point on ordinary and special values. */
+static void test_offset(void)
+{
+	const double special[] = { 0.0, -0.0, 1e-310, -1e-310, 1e300, -1e300, INFINITY, -INFINITY, NAN, 1.0, -3.5 };
+	int n_special = (int)(sizeof special / sizeof special[0]);
+	int same = 0, total = 0;
+	for (int i = 0; i < 20000; i++) {
+		vec3 p = rnd_v(-10, 10), ng = v3_norm(rnd_v(-1, 1)), dir = rnd_v(-1, 1);
+		if (i % 4 == 1)
+			p = v3_scale(p, pow(10, rnd_in(-300, 300)));
+		if (i % 4 == 2) { /* special components */
+			p.x = special[i / 4 % n_special];
+			p.y = special[i / 44 % n_special];
+			dir.z = special[i / 7 % n_special];
+		}
+		if (i % 16 == 3)
+			dir = v3(ng.y, -ng.x, 0); /* n.dir may be 0 */
+		vec3 a = offset(p, ng, dir), b = accel_offset_point(p, ng, dir);
+		total++;
+		same += memcmp(&a, &b, sizeof a) == 0;
+	}
+	CHECK(same == total);
+}
+
+/* Adds triangle abc as a root (transformed by xf when given), material mat. */
+static void add_tri(struct scene *s, vec3 a, vec3 b, vec3 c, uint32_t mat, const mat34 *xf)
+{
+	struct scene_object o;
+	struct scene_error err;
+	uint32_t id;
+	scene_object_defaults(&o, PRIM_TRIANGLE);
+	o.u.triangle.a = a;
+	o.u.triangle.b = b;
+	o.u.triangle.c = c;
+	o.material = mat;
+	if (xf) {
+		o.xform = *xf;
+		o.has_xform = true;
+	}
+	CHECK(scene_add_object(s, &o, &id, &err) == 0);
+	CHECK(scene_add_root(s, id, &err) == 0);
+}
+
+/* A point on triangle t (barycentric u, v), through its transform. */
+struct tri {
+	vec3 a, b, c;
+	bool xf;
+};
+
+static void test_tboxes(void)
+{
+	struct scene *s = scene_new();
+	struct scene_error err;
+	struct scene_material m;
+	uint32_t glass, tint;
+	scene_material_defaults(&m);
+	m.transparency = 0.5;
+	CHECK(scene_add_material(s, &m, &glass, &err) == 0);
+	scene_material_defaults(&m);
+	m.transparency = 0.9;
+	m.tran_colour = v3(1, 0.5, 0.5);
+	CHECK(scene_add_material(s, &m, &tint, &err) == 0);
+	/* two clusters of small transparent triangles (two boxes), some rotated */
+	mat34 rot = m34_identity();
+	rot.m[0][0] = 0.6, rot.m[0][1] = -0.8, rot.m[1][0] = 0.8, rot.m[1][1] = 0.6, rot.m[2][3] = 0.25;
+	enum { NT = 40 };
+	struct tri t[NT];
+	for (int i = 0; i < NT; i++) {
+		vec3 c = i < NT / 2 ? v3(-2, 0, 1) : v3(3, 1, -1);
+		t[i].a = v3_add(c, rnd_v(-0.5, 0.5));
+		t[i].b = v3_add(t[i].a, rnd_v(-0.3, 0.3));
+		t[i].c = v3_add(t[i].a, rnd_v(-0.3, 0.3));
+		t[i].xf = i % 5 == 0;
+		add_tri(s, t[i].a, t[i].b, t[i].c, i < NT / 2 ? glass : tint, t[i].xf ? &rot : NULL);
+		if (t[i].xf) {
+			t[i].a = m34_point(&rot, t[i].a);
+			t[i].b = m34_point(&rot, t[i].b);
+			t[i].c = m34_point(&rot, t[i].c);
+		}
+	}
+	struct accel *a = NULL;
+	CHECK(accel_build(s, &a, &err) == 0);
+	struct shade_ctx *c = NULL;
+	CHECK(shade_ctx_new(s, a, &c, &err) == 0);
+	if (!a || !c)
+		goto done;
+	CHECK(c->tbox_all && c->n_tbox == 2);
+	int missed = 0, wrong = 0;
+	for (int i = 0; i < 200000; i++) {
+		struct ray r;
+		int kind = i % 4;
+		const struct tri *q = &t[(int)(rnd() * NT)];
+		double u = rnd(), v = rnd() * (1 - u);
+		if (kind == 3) /* on an edge */
+			v = 1 - u;
+		vec3 on = v3_add(q->a, v3_add(v3_scale(v3_sub(q->b, q->a), u), v3_scale(v3_sub(q->c, q->a), v)));
+		vec3 far = rnd_v(-6, 6);
+		if (kind == 0) { /* anywhere */
+			r.o = rnd_v(-6, 6);
+			r.d = v3_sub(far, r.o);
+		} else if (kind == 1) { /* from a triangle, just off it, as a shadow ray leaves */
+			vec3 ng = v3_norm(v3_cross(v3_sub(q->b, q->a), v3_sub(q->c, q->a)));
+			vec3 o = offset(on, ng, v3_sub(far, on));
+			r.o = o;
+			r.d = v3_sub(far, o);
+		} else { /* ending on a triangle or one of its edges, or just past it */
+			r.o = far;
+			r.d = v3_scale(v3_sub(on, far), 1 + rnd_in(-1e-12, 1e-12));
+		}
+		r.tmin = 0;
+		r.tmax = 1;
+		if (may_cross_transparent(c, &r))
+			continue;
+		missed++;
+		wrong += accel_occluded(a, &r);
+	}
+	CHECK(missed > 10000); /* the test saw the shortcut taken */
+	CHECK(wrong == 0);
+	if (wrong)
+		fprintf(stderr, "%d of %d segments said clear were hit\n", wrong, missed);
+done:
+	shade_ctx_free(c);
+	accel_free(a);
+	scene_free(s);
+}
+
+/* The shortcut is off when a possibly transparent surface gets no box. */
+static void test_tboxes_off(void)
+{
+	struct scene *s = scene_new();
+	struct scene_error err;
+	struct scene_material m;
+	uint32_t glass;
+	scene_material_defaults(&m);
+	m.transparency = 0.5;
+	CHECK(scene_add_material(s, &m, &glass, &err) == 0);
+	add_tri(s, v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0), glass, NULL);
+	struct scene_object o;
+	uint32_t id;
+	scene_object_defaults(&o, PRIM_SPHERE);
+	o.material = glass;
+	CHECK(scene_add_object(s, &o, &id, &err) == 0);
+	CHECK(scene_add_root(s, id, &err) == 0);
+	struct accel *a = NULL;
+	struct shade_ctx *c = NULL;
+	CHECK(accel_build(s, &a, &err) == 0);
+	CHECK(shade_ctx_new(s, a, &c, &err) == 0);
+	CHECK(c && !c->tbox_all);
+	struct ray r = { v3(10, 10, 10), v3(1, 0, 0), 0, 1 };
+	CHECK(c && may_cross_transparent(c, &r));
+	shade_ctx_free(c);
+	accel_free(a);
+	scene_free(s);
+}
+
+int main(void)
+{
+	test_offset();
+	test_tboxes();
+	test_tboxes_off();
+	TEST_MAIN_END();
+}
