@@ -9,7 +9,8 @@
  * faster) and whose shadow rays toward each point light go together too
  * (shade_eye_hit4); each pixel gets exactly the colour filter_pixel would
  * give. Other filters trace super-sample grids and adaptive corners four
- * rays at a time the same way (filter_pixel4 over trace_shade4).
+ * rays at a time the same way (filter_pixels4 over trace_shade4), a grid's
+ * packets running across four pixels of a row.
  */
 #include "common/render.h"
 
@@ -357,9 +358,9 @@ out:
 
 /*
  * The tile runs in a cancel scope of its own (cancel.h): besides the polls
- * here, one per 2x2 block or pixel, the filters poll once per sample,
- * shading once per light of a shading point, and the traversal when it
- * enters an instance and every ACCEL_POLL_POPS subtrees, so one
+ * here, one per 2x2 block or four pixels, the filters poll once per sample
+ * or packet, shading once per light of a shading point, and the traversal
+ * when it enters an instance and every ACCEL_POLL_POPS subtrees, so one
  * pathological ray is abandoned too. Whatever they computed after a poll
  * saw the flag is wrong, so the tile is complete only when no poll did:
  * then every pixel is exactly what a run without a flag gives.

@@ -78,12 +78,12 @@ void renderer_tile(const struct renderer *r, struct tile_rect t, uint8_t *rgb);
 /*
  * As renderer_tile, but gives up when *cancel (may be NULL: never) becomes
  * non-zero, within a few milliseconds of work whatever the scene: the flag
- * is polled per pixel (per 2x2 block for filter standard), per filter
- * sample, per light of a shading point, and inside the traversal of a
- * ray, so one ray through 2^63 nested instances is abandoned too
- * (common/cancel.h). Returns 1 when the whole tile is in rgb, exactly as
- * renderer_tile gives it; 0 when it gave up (rgb then holds a partial,
- * partly wrong tile: do not use it).
+ * is polled per four pixels of a row (per 2x2 block for filter standard),
+ * per filter sample or packet of four, per light of a shading point, and
+ * inside the traversal of a ray, so one ray through 2^63 nested instances
+ * is abandoned too (common/cancel.h). Returns 1 when the whole tile is in
+ * rgb, exactly as renderer_tile gives it; 0 when it gave up (rgb then holds
+ * a partial, partly wrong tile: do not use it).
  */
 int renderer_tile_cancellable(const struct renderer *r, struct tile_rect t, uint8_t *rgb,
 			      atomic_int *cancel);
