@@ -29,7 +29,8 @@
 # ratio = portray / POV-Ray (below 1: portray is faster). Targets of issue
 # 13: plain CPU ratio <= 0.20 and ss3 ratio/ray <= 0.33 at 1 thread.
 #
-# POV_SCENES="balls_s4 teapot" limits the scenes. Skips (exit 0) when povray,
+# POV_SCENES="balls_s4 teapot" limits the scenes, POV_MODES=plain (or ss3) the
+# modes. Skips (exit 0) when povray,
 # /usr/bin/time or the shared data is missing. Nothing here is a test.
 SHARED=${PORTRAY_SHARED:-../shared/data}
 MASTER=${MASTER:-bin/portray-master}
@@ -37,6 +38,7 @@ W=${POV_W:-1280}
 H=${POV_H:-960}
 REPS=${POV_REPS:-2}
 THREADS=${POV_THREADS:-1}
+MODES=${POV_MODES:-plain ss3}
 if ! command -v povray >/dev/null 2>&1; then
 	echo "povray not installed: skipped"
 	exit 0
@@ -182,7 +184,7 @@ run_ours() {
 compare() {
 	sed 's/filter standard/filter super-sample x-samples 3 y-samples 3/' "$2" >"$TMP/$1.ss3.sce"
 	for threads in $THREADS; do
-		for mode in plain ss3; do
+		for mode in $MODES; do
 			s=$2
 			[ "$mode" = ss3 ] && s=$TMP/$1.ss3.sce
 			best_p="" best_o=""
