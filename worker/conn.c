@@ -125,9 +125,34 @@ void wk_conn_close(struct wk_conn *c)
 	free(c);
 }
 
+static void on_message(struct wk_conn *c, const struct proto_msg *m);
+
+/*
+ * The master closed while this end was still sending: after refusing a
+ * tile it sends its ERROR and closes, and the tiles this worker sends
+ * meanwhile make its side reset the connection. What it sent before is
+ * still readable (a reset does not take back data already received), so
+ * its ERROR is read and logged, as it would have been without the race.
+ */
+static void last_words(struct wk_conn *c)
+{
+	const char *why = NULL;
+	for (int i = 0; i < 64 && c->state != ST_CLOSING; i++) {
+		int r = proto_conn_read(c->pc, &why);
+		struct proto_msg m;
+		int code;
+		while (c->state != ST_CLOSING && proto_conn_next(c->pc, &m, &code, &why) > 0)
+			if (m.type == MSG_ERROR)
+				on_message(c, &m);
+		if (r <= 0)
+			break;
+	}
+}
+
 bool wk_conn_settle(struct wk_conn *c)
 {
 	if (proto_conn_flush(c->pc) < 0) {
+		last_words(c);
 		wk_conn_job_log(c, "connection lost while sending");
 		wk_conn_close(c);
 		return false;
