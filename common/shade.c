@@ -18,6 +18,9 @@
 
 #include <math.h>
 #include <stdlib.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "common/cancel.h"
 #include "common/rng.h"
@@ -740,6 +743,51 @@ bool shade_eye_ray(const struct ray *r, struct ray *u)
 		return false;
 	*u = (struct ray){ r->o, v3_scale(r->d, 1 / len), r->tmin * len, r->tmax * len };
 	return true;
+}
+
+/*
+ * shade_eye_ray of e[min(k, n - 1)] into u[k] and ok[k], k < 4 (a ray that
+ * cannot be traced is copied as it is, traced for nothing, never shaded).
+ * SSE2: when all four lengths and origins pass shade_eye_ray's test, its
+ * arithmetic (a square root, a division, four products) two rays at a time,
+ * the same IEEE results; any other packet goes through shade_eye_ray. It
+ * sits beside shade_eye_ray: a change to one is a change to both.
+ */
+void shade_eye_rays4(const struct ray e[4], int n, struct ray u[4], bool ok[4])
+{
+#if defined(__SSE2__)
+	const struct ray *q[4];
+	for (int k = 0; k < 4; k++)
+		q[k] = &e[k < n ? k : n - 1];
+	__m128d len[2], inv[2];
+	bool good = true;
+	for (int h = 0; h < 2; h++) {
+		const struct ray *a = q[2 * h], *b = q[2 * h + 1];
+		__m128d x = _mm_set_pd(b->d.x, a->d.x), y = _mm_set_pd(b->d.y, a->d.y), z = _mm_set_pd(b->d.z, a->d.z);
+		/* v3_len: sqrt((x*x + y*y) + z*z) */
+		len[h] = _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(x, x), _mm_mul_pd(y, y)), _mm_mul_pd(z, z)));
+		inv[h] = _mm_div_pd(_mm_set1_pd(1.0), len[h]);
+		/* len > 0 and finite: 0 < len < infinity (false for NaN) */
+		__m128d fine = _mm_and_pd(_mm_cmpgt_pd(len[h], _mm_setzero_pd()), _mm_cmplt_pd(len[h], _mm_set1_pd(INFINITY)));
+		good &= _mm_movemask_pd(fine) == 3 && v3_finite(a->o) && v3_finite(b->o);
+	}
+	if (good) {
+		for (int k = 0; k < 4; k++) {
+			double l, i;
+			_mm_store_sd(&l, k & 1 ? _mm_unpackhi_pd(len[k >> 1], len[k >> 1]) : len[k >> 1]);
+			_mm_store_sd(&i, k & 1 ? _mm_unpackhi_pd(inv[k >> 1], inv[k >> 1]) : inv[k >> 1]);
+			u[k] = (struct ray){ q[k]->o, v3_scale(q[k]->d, i), q[k]->tmin * l, q[k]->tmax * l };
+			ok[k] = true;
+		}
+		return;
+	}
+#endif
+	for (int k = 0; k < 4; k++) {
+		const struct ray *q1 = &e[k < n ? k : n - 1];
+		ok[k] = shade_eye_ray(q1, &u[k]);
+		if (!ok[k])
+			u[k] = *q1; /* traced for nothing, never shaded */
+	}
 }
 
 vec3 shade_eye_hit(const struct shade_ctx *c, const struct ray *u, const struct hit *h, uint64_t seed)

@@ -36,6 +36,9 @@ vec3 shade_trace(const struct shade_ctx *c, const struct ray *r, uint64_t seed);
  * Together they give shade_trace's colour, bit for bit.
  */
 bool shade_eye_ray(const struct ray *r, struct ray *u);
+/* shade_eye_ray of n <= 4 rays e[0..n) at once into u and ok (lanes from n
+ * on repeat e[n-1]), bit for bit. */
+void shade_eye_rays4(const struct ray e[4], int n, struct ray u[4], bool ok[4]);
 vec3 shade_eye_hit(const struct shade_ctx *c, const struct ray *u, const struct hit *h, uint64_t seed);
 /*
  * shade_eye_hit of n <= 4 neighbouring eye rays (a 2x2 block): out[k] is

@@ -520,8 +520,53 @@ static void test_shaped_lights(void)
 	scene_free(s);
 }
 
+/* shade_eye_rays4 is shade_eye_ray four at a time, bit for bit, with the
+ * lanes past n repeating the last ray, untraceable rays (zero, infinite or
+ * NaN directions, infinite origins) included. */
+static bool same_bits(double a, double b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+static void test_eye_rays4(void)
+{
+	uint64_t x = 88172645463325252ull;
+	double odd[] = { 0.0, -0.0, INFINITY, NAN, 1e-310, 1e300 };
+	int bad = 0;
+	for (int round = 0; round < 20000; round++) {
+		struct ray e[4];
+		for (int k = 0; k < 4; k++) {
+			double v[7];
+			for (int j = 0; j < 7; j++) {
+				x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+				v[j] = ((double)(x >> 11) / 9007199254740992.0 - 0.5) * 8;
+				if ((x & 255) < 3)
+					v[j] = odd[(x >> 8) % 6];
+			}
+			e[k] = (struct ray){ v3(v[0], v[1], v[2]), v3(v[3], v[4], v[5]), fabs(v[6]) * 0.01, INFINITY };
+		}
+		int n = 1 + round % 4;
+		struct ray u[4];
+		bool ok[4];
+		shade_eye_rays4(e, n, u, ok);
+		for (int k = 0; k < 4; k++) {
+			struct ray w;
+			const struct ray *q = &e[k < n ? k : n - 1];
+			bool okw = shade_eye_ray(q, &w);
+			if (okw != ok[k]) {
+				bad++;
+				continue;
+			}
+			if (!okw)
+				w = *q;
+			bad += !(same_bits(u[k].o.x, w.o.x) && same_bits(u[k].o.y, w.o.y) && same_bits(u[k].o.z, w.o.z) &&
+				 same_bits(u[k].d.x, w.d.x) && same_bits(u[k].d.y, w.d.y) && same_bits(u[k].d.z, w.d.z) &&
+				 same_bits(u[k].tmin, w.tmin) && same_bits(u[k].tmax, w.tmax));
+		}
+	}
+	CHECK(bad == 0);
+}
+
 int main(void)
 {
+	test_eye_rays4();
 	test_diffuse();
 	test_fall_off();
 	test_shadows();
