@@ -36,79 +36,24 @@ _Static_assert(BVH_CANCELLED == CANCEL_RETURN, "the builder gives up with the co
  * full builds its subtree itself. */
 #define BVH_TASKS 64
 
-/*
- * Four floats, lanes x y z and a spare: an SSE register where there is
- * one, else a plain array (the same values: every operation below is one
- * IEEE single operation per lane, or a min/max that picks an operand).
- */
-#ifdef __SSE2__
-typedef __m128 f4;
-static inline f4 f4_load(const float *p) { return _mm_load_ps(p); }
-static inline void f4_store(float *p, f4 a) { _mm_store_ps(p, a); }
-static inline f4 f4_set1(float a) { return _mm_set1_ps(a); }
-static inline f4 f4_add(f4 a, f4 b) { return _mm_add_ps(a, b); }
-static inline f4 f4_sub(f4 a, f4 b) { return _mm_sub_ps(a, b); }
-static inline f4 f4_mul(f4 a, f4 b) { return _mm_mul_ps(a, b); }
-/* minps/maxps: the second operand unless the first is less / greater */
-static inline f4 f4_min(f4 a, f4 b) { return _mm_min_ps(a, b); }
-static inline f4 f4_max(f4 a, f4 b) { return _mm_max_ps(a, b); }
-/* lane 3 set to 0 (where an item record keeps its index) */
-static inline f4 f4_xyz(f4 a) { return _mm_and_ps(a, _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0))); }
-/* truncated to int: the lanes are in [0, BVH_BINS - 1] */
-static inline void f4_bins(f4 a, int32_t *k) { _mm_store_si128((__m128i *)(void *)k, _mm_cvttps_epi32(a)); }
-#else
-typedef struct {
-	float v[4];
-} f4;
-static inline f4 f4_load(const float *p) { f4 r; memcpy(r.v, p, sizeof r.v); return r; }
-static inline void f4_store(float *p, f4 a) { memcpy(p, a.v, sizeof a.v); }
-static inline f4 f4_set1(float a) { return (f4){ { a, a, a, a } }; }
-#define F4_OP(name, expr)                                   \
-	static inline f4 name(f4 a, f4 b)                   \
-	{                                                   \
-		f4 r;                                       \
-		for (int l = 0; l < 4; l++)                 \
-			r.v[l] = expr;                      \
-		return r;                                   \
-	}
-F4_OP(f4_add, a.v[l] + b.v[l])
-F4_OP(f4_sub, a.v[l] - b.v[l])
-F4_OP(f4_mul, a.v[l] * b.v[l])
-F4_OP(f4_min, a.v[l] < b.v[l] ? a.v[l] : b.v[l])
-F4_OP(f4_max, a.v[l] > b.v[l] ? a.v[l] : b.v[l])
-static inline f4 f4_xyz(f4 a) { a.v[3] = 0; return a; }
-static inline void f4_bins(f4 a, int32_t *k) { for (int l = 0; l < 4; l++) k[l] = (int32_t)a.v[l]; }
-#endif
-
-/*
- * An item as the builder reads it (32 bytes, kept in leaf order beside
- * perm, so the builder reads and swaps them in place instead of reaching
- * through perm): its box rounded outward to float (a node's float bounds
- * are then the union of its items', the very floats that rounding the
- * union of the double boxes outward gives: rounding is monotonic), the
- * item's index in lo[3] (its bits) and the box's area in hi[3].
- */
-struct bvh_rec {
-	_Alignas(16) float lo[4];
-	float hi[4];
-};
-
-/* A node's items' bounds: the union of the boxes (lanes x y z), of the
- * centroids, and the largest box area. */
+/* A node's items' bounds, as the binning of its parent found them: the
+ * union of the boxes, of the centroids, and the largest box area. */
 struct bvh_span {
-	f4 blo, bhi, clo, chi;
-	float amax;
+	struct geom_box bb, cb;
+	double amax;
 };
 
 /* A subtree to build: node ni over perm[begin, end). */
 struct bvh_task {
-	struct bvh_span sp;
 	uint32_t ni, begin, end;
 	int depth;
+	struct bvh_span sp;
 };
 
 struct bvh_ctx {
-	struct bvh_rec *rec; /* the items, in the order of perm */
+	const struct geom_box *boxes; /* the items' boxes; or NULL and fboxes */
+	const float (*fboxes)[6];
+	uint32_t *perm;
 	struct bvh_node *nodes;
 	atomic_uint n_nodes; /* nodes handed out (any thread) */
 	uint32_t max_leaf;
@@ -124,7 +69,7 @@ struct bvh_ctx {
 };
 
 /* The float one step below f (not NaN, not -inf): nextafterf(f, -INFINITY)
- * without the call. */
+ * without the call (a node's bounds make six). */
 static inline float float_down(float f)
 {
 	uint32_t u;
@@ -139,7 +84,7 @@ static inline float float_down(float f)
 	return f;
 }
 
-static inline float round_down(double x)
+static float round_down(double x)
 {
 	float f = (float)x;
 	if ((double)f > x)
@@ -147,7 +92,7 @@ static inline float round_down(double x)
 	return f;
 }
 
-static inline float round_up(double x)
+static float round_up(double x)
 {
 	float f = (float)x;
 	if ((double)f < x)
@@ -155,104 +100,136 @@ static inline float round_up(double x)
 	return f;
 }
 
-/* The surface area of the box lo..hi (lanes x y z), 0 when empty; in
- * double (the SAH's costs). */
-static double f4_area(f4 lo, f4 hi)
+static double box_area(struct geom_box b)
 {
-	float l[4], h[4];
-	f4_store(l, lo);
-	f4_store(h, hi);
-	double ex = (double)h[0] - l[0], ey = (double)h[1] - l[1], ez = (double)h[2] - l[2];
-	if (ex < 0 || ey < 0 || ez < 0)
+	vec3 e = v3_sub(b.hi, b.lo);
+	if (e.x < 0 || e.y < 0 || e.z < 0)
 		return 0;
-	return 2 * (ex * ey + ey * ez + ez * ex);
+	return 2 * (e.x * e.y + e.y * e.z + e.z * e.x);
 }
 
-static inline void span_empty(struct bvh_span *sp)
+/* geom_box_empty, geom_box_union and geom_box_point, inline (the same
+ * values and comparisons) */
+#define EMPTY_BOX ((struct geom_box){ { INFINITY, INFINITY, INFINITY }, { -INFINITY, -INFINITY, -INFINITY } })
+static inline double mn(double a, double b) { return a < b ? a : b; }
+static inline double mx(double a, double b) { return a > b ? a : b; }
+#ifdef __SSE2__
+/* minpd/maxpd return their second operand unless the first is less /
+ * greater: mn and mx exactly */
+static inline void box_grow(struct geom_box *r, const struct geom_box *b)
 {
-	sp->blo = sp->clo = f4_set1(INFINITY);
-	sp->bhi = sp->chi = f4_set1(-INFINITY);
-	sp->amax = 0;
+	const double *pr = &r->lo.x, *pb = &b->lo.x;
+	__m128d lo = _mm_min_pd(_mm_loadu_pd(pr), _mm_loadu_pd(pb));
+	__m128d mid = _mm_loadu_pd(pr + 2), bmid = _mm_loadu_pd(pb + 2);
+	__m128d mlo = _mm_min_pd(mid, bmid), mhi = _mm_max_pd(mid, bmid);
+	__m128d hi = _mm_max_pd(_mm_loadu_pd(pr + 4), _mm_loadu_pd(pb + 4));
+	_mm_storeu_pd(&r->lo.x, lo);
+	_mm_storeu_pd(&r->lo.z, _mm_move_sd(mhi, mlo)); /* lo.z from the min, hi.x from the max */
+	_mm_storeu_pd(&r->hi.y, hi);
 }
-
-/* Record r's box (lane 3 zero) and centroid (the halves added: no
- * overflow). */
-static inline void rec_get(const struct bvh_rec *r, f4 *lo, f4 *hi, f4 *c)
+#else
+static inline void box_grow(struct geom_box *r, const struct geom_box *b)
 {
-	*lo = f4_xyz(f4_load(r->lo));
-	*hi = f4_xyz(f4_load(r->hi));
-	f4 half = f4_set1(0.5f);
-	*c = f4_add(f4_mul(*lo, half), f4_mul(*hi, half));
+	r->lo.x = mn(r->lo.x, b->lo.x), r->lo.y = mn(r->lo.y, b->lo.y), r->lo.z = mn(r->lo.z, b->lo.z);
+	r->hi.x = mx(r->hi.x, b->hi.x), r->hi.y = mx(r->hi.y, b->hi.y), r->hi.z = mx(r->hi.z, b->hi.z);
 }
-
-static inline void span_add(struct bvh_span *sp, const struct bvh_rec *r, f4 lo, f4 hi, f4 c)
+#endif
+#ifdef __SSE2__
+static inline void box_grow_pt(struct geom_box *r, vec3 p)
 {
-	sp->blo = f4_min(sp->blo, lo);
-	sp->bhi = f4_max(sp->bhi, hi);
-	sp->clo = f4_min(sp->clo, c);
-	sp->chi = f4_max(sp->chi, c);
-	sp->amax = r->hi[3] > sp->amax ? r->hi[3] : sp->amax;
+	double *pr = &r->lo.x;
+	__m128d pxy = _mm_loadu_pd(&p.x), pz = _mm_set1_pd(p.z);
+	__m128d mid = _mm_loadu_pd(pr + 2); /* lo.z, hi.x */
+	_mm_storeu_pd(pr, _mm_min_pd(_mm_loadu_pd(pr), pxy));
+	__m128d zx = _mm_move_sd(_mm_max_pd(mid, _mm_unpacklo_pd(pz, pxy)), _mm_min_pd(mid, pz));
+	_mm_storeu_pd(pr + 2, zx); /* lo.z from the min, hi.x from the max */
+	_mm_storeu_pd(pr + 4, _mm_max_pd(_mm_loadu_pd(pr + 4), _mm_unpackhi_pd(pxy, pz)));
 }
-
-/* The bins of centroid c on the three axes, binned from lo at scale
- * (an axis of scale 0 puts everything in bin 0). NaN (inf times 0) goes
- * to bin 0: maxps gives its second operand then. */
-static inline void bins_of(f4 c, f4 lo, f4 scale, int32_t *k)
+#else
+static inline void box_grow_pt(struct geom_box *r, vec3 p)
 {
-	f4 v = f4_mul(f4_sub(c, lo), scale);
-	v = f4_min(f4_max(v, f4_set1(0)), f4_set1(BVH_BINS - 1));
-	f4_bins(v, k);
+	r->lo.x = mn(r->lo.x, p.x), r->lo.y = mn(r->lo.y, p.y), r->lo.z = mn(r->lo.z, p.z);
+	r->hi.x = mx(r->hi.x, p.x), r->hi.y = mx(r->hi.y, p.y), r->hi.z = mx(r->hi.z, p.z);
+}
+#endif
+
+/* An item's centroid (recomputed where needed: an array of them would
+ * be 24 bytes per item more at the build's peak). */
+static inline vec3 cent_of(const struct geom_box *b) { return v3_scale(v3_add(b->lo, b->hi), 0.5); }
+
+/* The bin of centroid coordinate c on an axis binned from lo at scale. */
+static inline int bin_of(double c, double lo, double scale)
+{
+	int k = (int)((c - lo) * scale);
+	return k < 0 ? 0 : k >= BVH_BINS ? BVH_BINS - 1 : k;
 }
 
-/* The span of rec[begin, end), item by item. */
+/* Item it's box: a pointer into the doubles, or its float box in *tmp. */
+static inline const struct geom_box *item_box(const struct bvh_ctx *B, uint32_t it, struct geom_box *tmp)
+{
+	if (B->boxes)
+		return &B->boxes[it];
+	const float *f = B->fboxes[it];
+	tmp->lo = v3(f[0], f[1], f[2]);
+	tmp->hi = v3(f[3], f[4], f[5]);
+	return tmp;
+}
+
+/* The span of perm[begin, end), item by item. */
 static void span_of(const struct bvh_ctx *B, uint32_t begin, uint32_t end, struct bvh_span *sp)
 {
-	span_empty(sp);
+	sp->bb = EMPTY_BOX;
+	sp->cb = EMPTY_BOX;
+	sp->amax = 0;
 	for (uint32_t i = begin; i < end; i++) {
 		if (cancel_poll_every(i))
 			return;
-		f4 lo, hi, c;
-		rec_get(&B->rec[i], &lo, &hi, &c);
-		span_add(sp, &B->rec[i], lo, hi, c);
+		struct geom_box tmp;
+		const struct geom_box *ib = item_box(B, B->perm[i], &tmp);
+		box_grow(&sp->bb, ib);
+		box_grow_pt(&sp->cb, cent_of(ib));
+		sp->amax = mx(sp->amax, box_area(*ib));
 	}
 }
 
+/* Adds item it to span *sp. */
+static inline void span_add(const struct bvh_ctx *B, struct bvh_span *sp, uint32_t it)
+{
+	struct geom_box tmp;
+	const struct geom_box *ib = item_box(B, it, &tmp);
+	box_grow(&sp->bb, ib);
+	box_grow_pt(&sp->cb, cent_of(ib));
+	sp->amax = mx(sp->amax, box_area(*ib));
+}
+
 /*
- * Partitions rec[begin, end) so that the items whose centroid falls in a
+ * Partitions perm[begin, end) so that the items whose centroid falls in a
  * bin below split_bin on axis come first (the order a swap from both ends
  * makes); returns the first of the others. The spans of both sides come
  * out in *left and *right. With big > 0 the test is instead "box area
  * above big" (the big items first).
  */
-static uint32_t partition(struct bvh_ctx *B, uint32_t begin, uint32_t end, int axis, f4 clo, f4 scale,
-			  int split_bin, double big, struct bvh_span *left, struct bvh_span *right)
+static uint32_t partition(struct bvh_ctx *B, uint32_t begin, uint32_t end, int axis, double lo,
+			  double scale, int split_bin, double big, struct bvh_span *left, struct bvh_span *right)
 {
 	uint32_t i = begin, j = end;
-	struct bvh_rec *rec = B->rec;
-	span_empty(left);
-	span_empty(right);
+	left->bb = left->cb = right->bb = right->cb = EMPTY_BOX;
+	left->amax = right->amax = 0;
 	while (i < j) {
 		if (cancel_poll_every(i))
 			return i;
-		f4 lo, hi, c;
-		rec_get(&rec[i], &lo, &hi, &c);
-		bool first;
-		if (big > 0) {
-			first = rec[i].hi[3] > big;
-		} else {
-			_Alignas(16) int32_t k[4];
-			bins_of(c, clo, scale, k);
-			first = k[axis] < split_bin;
-		}
+		uint32_t it = B->perm[i];
+		struct geom_box tmp;
+		const struct geom_box *ib = item_box(B, it, &tmp);
+		bool first = big > 0 ? box_area(*ib) > big : bin_of(v3_comp(cent_of(ib), axis), lo, scale) < split_bin;
 		if (first) {
-			span_add(left, &rec[i], lo, hi, c);
+			span_add(B, left, it);
 			i++;
 		} else {
-			span_add(right, &rec[i], lo, hi, c);
+			span_add(B, right, it);
 			j--;
-			struct bvh_rec t = rec[i];
-			rec[i] = rec[j];
-			rec[j] = t;
+			B->perm[i] = B->perm[j];
+			B->perm[j] = it;
 		}
 	}
 	return i;
@@ -260,7 +237,7 @@ static uint32_t partition(struct bvh_ctx *B, uint32_t begin, uint32_t end, int a
 
 /* One bin of one axis: its items' boxes and count. */
 struct bvh_bin {
-	f4 lo, hi;
+	struct geom_box b;
 	uint32_t n;
 };
 
@@ -277,7 +254,7 @@ static bool offer(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t end, 
 	bool taken = false;
 	pthread_mutex_lock(&B->mu);
 	if (B->n_task < BVH_TASKS && B->n_task + B->busy < (int)B->n_threads + 1) {
-		B->task[B->n_task++] = (struct bvh_task){ *sp, ni, begin, end, depth };
+		B->task[B->n_task++] = (struct bvh_task){ ni, begin, end, depth, *sp };
 		pthread_cond_signal(&B->cv);
 		taken = true;
 	}
@@ -293,30 +270,28 @@ static bool offer(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t end, 
  * so the same cost, as the one before that bin, which comes first and
  * wins the tie (the costs are compared with <).
  */
-static bool best_split(const struct bvh_bin *bn, int nbins, double *best, int *best_bin)
+static bool best_split(const struct bvh_bin *bn, double *best, int *best_bin)
 {
 	int used[BVH_BINS], nu = 0;
-	for (int k = 0; k < nbins; k++)
+	for (int k = 0; k < BVH_BINS; k++)
 		if (bn[k].n)
 			used[nu++] = k;
 	/* right_cost[u]: the bins from used[u] up */
 	double right_cost[BVH_BINS];
-	f4 alo = f4_set1(INFINITY), ahi = f4_set1(-INFINITY);
+	struct geom_box acc = EMPTY_BOX;
 	uint32_t cnt = 0;
 	for (int u = nu - 1; u > 0; u--) {
-		alo = f4_min(alo, bn[used[u]].lo);
-		ahi = f4_max(ahi, bn[used[u]].hi);
+		box_grow(&acc, &bn[used[u]].b);
 		cnt += bn[used[u]].n;
-		right_cost[u] = f4_area(alo, ahi) * cnt;
+		right_cost[u] = box_area(acc) * cnt;
 	}
 	bool better = false;
-	alo = f4_set1(INFINITY), ahi = f4_set1(-INFINITY);
+	acc = EMPTY_BOX;
 	cnt = 0;
 	for (int u = 0; u + 1 < nu; u++) { /* split before bin used[u] + 1 */
-		alo = f4_min(alo, bn[used[u]].lo);
-		ahi = f4_max(ahi, bn[used[u]].hi);
+		box_grow(&acc, &bn[used[u]].b);
 		cnt += bn[used[u]].n;
-		double c = f4_area(alo, ahi) * cnt + right_cost[u + 1];
+		double c = box_area(acc) * cnt + right_cost[u + 1];
 		if (c < *best)
 			*best = c, *best_bin = used[u] + 1, better = true;
 	}
@@ -324,65 +299,59 @@ static bool best_split(const struct bvh_bin *bn, int nbins, double *best, int *b
 }
 
 /*
- * Builds node ni over rec[begin, end), whose span is *span. Recursion
+ * Builds node ni over perm[begin, end), whose span is *span. Recursion
  * depth < BVH_MAX_DEPTH. Returns at once, leaving garbage, when a cancel
- * poll says true. Every decision depends on the node's items and their
- * order only (which its parent's partition made), never on which thread
- * builds it, so the tree does not depend on the threads.
+ * poll says true. Every decision is the one the item-by-item builder of
+ * before made (the bins, spans and costs are the same doubles: min and
+ * max are exact in any order), so the tree does not depend on the threads.
  */
 static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t end, int depth,
 		       const struct bvh_span *span)
 {
 	if (cancel_poll())
 		return;
+	struct geom_box bb = span->bb, cb = span->cb;
 	struct bvh_node *nd = &B->nodes[ni];
-	{
-		_Alignas(16) float l[4], h[4];
-		f4_store(l, span->blo);
-		f4_store(h, span->bhi);
-		memcpy(nd->b, l, 3 * sizeof(float));
-		memcpy(nd->b + 3, h, 3 * sizeof(float));
-	}
+	nd->b[0] = round_down(bb.lo.x), nd->b[1] = round_down(bb.lo.y), nd->b[2] = round_down(bb.lo.z);
+	nd->b[3] = round_up(bb.hi.x), nd->b[4] = round_up(bb.hi.y), nd->b[5] = round_up(bb.hi.z);
 	uint32_t n = end - begin;
 	if (n <= 1 || depth >= BVH_MAX_DEPTH - 1 || (B->pack && n <= B->max_leaf))
 		goto leaf;
 
-	/* one pass bins the items on all three axes */
+	/* one pass bins the items on every axis their centroids spread along */
+	static const struct bvh_bin empty_bin = { { { INFINITY, INFINITY, INFINITY }, { -INFINITY, -INFINITY, -INFINITY } },
+						  0 };
 	struct bvh_bin bin[3][BVH_BINS];
-	const struct bvh_rec *rec = B->rec;
-	_Alignas(16) float clo[4], chi[4], sc[4];
-	f4_store(clo, span->clo);
-	f4_store(chi, span->chi);
+	double lo3[3], scale3[3];
 	int live[3], n_live = 0;
 	for (int axis = 0; axis < 3; axis++) {
-		float ext = chi[axis] - clo[axis];
-		sc[axis] = 0;
+		double lo = v3_comp(cb.lo, axis), ext = v3_comp(cb.hi, axis) - lo;
 		if (!(ext > 0))
 			continue;
-		sc[axis] = BVH_BINS / ext;
+		lo3[axis] = lo;
+		scale3[axis] = BVH_BINS / ext;
 		live[n_live++] = axis;
-	}
-	sc[3] = 0;
-	f4 lo4 = span->clo, scale = f4_load(sc);
-	for (int a = 0; a < 3; a++)
 		for (int k = 0; k < BVH_BINS; k++)
-			bin[a][k] = (struct bvh_bin){ f4_set1(INFINITY), f4_set1(-INFINITY), 0 };
+			bin[axis][k] = empty_bin;
+	}
 	for (uint32_t i = begin; i < end; i++) {
 		if (cancel_poll_every(i))
 			return;
-		f4 lo, hi, c;
-		rec_get(&rec[i], &lo, &hi, &c);
-		_Alignas(16) int32_t k[4];
-		bins_of(c, lo4, scale, k);
-		struct bvh_bin *b0 = &bin[0][k[0]], *b1 = &bin[1][k[1]], *b2 = &bin[2][k[2]];
-		b0->lo = f4_min(b0->lo, lo), b0->hi = f4_max(b0->hi, hi), b0->n++;
-		b1->lo = f4_min(b1->lo, lo), b1->hi = f4_max(b1->hi, hi), b1->n++;
-		b2->lo = f4_min(b2->lo, lo), b2->hi = f4_max(b2->hi, hi), b2->n++;
+		uint32_t it = B->perm[i];
+		struct geom_box tmp;
+		const struct geom_box *ib = item_box(B, it, &tmp);
+		vec3 c = cent_of(ib);
+		for (int l = 0; l < n_live; l++) {
+			int axis = live[l];
+			struct bvh_bin *bk = &bin[axis][bin_of(v3_comp(c, axis), lo3[axis], scale3[axis])];
+			bk->n++;
+			box_grow(&bk->b, ib);
+		}
 	}
 	double best = INFINITY;
 	int best_axis = -1, best_bin = 0;
 	for (int l = 0; l < n_live; l++)
-		if (best_split(bin[live[l]], BVH_BINS, &best, &best_bin))
+		if (best_split(bin[live[l]], &best, &best_bin))
 			best_axis = live[l];
 	/* Also try setting the big items apart (a floor under a sphereflake):
 	 * centroid bins cannot separate them when their centres sit among the
@@ -390,33 +359,33 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 	 * fraction (else every try puts all items on one side). */
 	static const double big_frac[3] = { 0.5, 0.2, 0.05 };
 	int best_big = -1;
-	double node_area = f4_area(span->blo, span->bhi);
+	double node_area = box_area(bb);
 	if (span->amax > big_frac[2] * node_area) {
-		f4 l1[3], h1[3], l2[3], h2[3];
+		struct geom_box b1[3], b2[3];
 		uint32_t n1[3] = { 0, 0, 0 };
 		double thr[3];
 		for (int q = 0; q < 3; q++) {
-			l1[q] = l2[q] = f4_set1(INFINITY);
-			h1[q] = h2[q] = f4_set1(-INFINITY);
+			b1[q] = b2[q] = EMPTY_BOX;
 			thr[q] = big_frac[q] * node_area;
 		}
 		for (uint32_t i = begin; i < end; i++) {
 			if (cancel_poll_every(i))
 				return;
-			f4 lo, hi, c;
-			rec_get(&rec[i], &lo, &hi, &c);
-			double a = rec[i].hi[3];
+			uint32_t it = B->perm[i];
+			struct geom_box tmp;
+			const struct geom_box *ib = item_box(B, it, &tmp);
+			double a = box_area(*ib);
 			for (int q = 0; q < 3; q++) {
 				if (a > thr[q])
-					l1[q] = f4_min(l1[q], lo), h1[q] = f4_max(h1[q], hi), n1[q]++;
+					box_grow(&b1[q], ib), n1[q]++;
 				else
-					l2[q] = f4_min(l2[q], lo), h2[q] = f4_max(h2[q], hi);
+					box_grow(&b2[q], ib);
 			}
 		}
 		for (int q = 0; q < 3; q++) {
 			if (n1[q] == 0 || n1[q] == n)
 				continue;
-			double c = f4_area(l1[q], h1[q]) * n1[q] + f4_area(l2[q], h2[q]) * (n - n1[q]);
+			double c = box_area(b1[q]) * n1[q] + box_area(b2[q]) * (n - n1[q]);
 			if (c < best)
 				best = c, best_big = q;
 		}
@@ -426,7 +395,7 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 	bool spans = false; /* left and right are the halves' spans */
 	if (best_big >= 0) {
 		/* partitioned before the leaf test: a leaf keeps this order */
-		mid = partition(B, begin, end, 0, lo4, scale, 0, big_frac[best_big] * node_area, &left, &right);
+		mid = partition(B, begin, end, 0, 0, 0, 0, big_frac[best_big] * node_area, &left, &right);
 		spans = true;
 		double split_cost = BVH_COST_TRAV * node_area + BVH_COST_ISECT * best;
 		if (n <= B->max_leaf && BVH_COST_ISECT * node_area * n <= split_cost)
@@ -436,11 +405,13 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 			goto leaf;
 		mid = begin + n / 2;
 	} else {
-		double split_cost = BVH_COST_TRAV * node_area + BVH_COST_ISECT * best;
-		double leaf_cost = BVH_COST_ISECT * node_area * n;
+		double area = box_area(bb);
+		double split_cost = BVH_COST_TRAV * area + BVH_COST_ISECT * best;
+		double leaf_cost = BVH_COST_ISECT * area * n;
 		if (n <= B->max_leaf && leaf_cost <= split_cost)
 			goto leaf;
-		mid = partition(B, begin, end, best_axis, lo4, scale, best_bin, 0, &left, &right);
+		mid = partition(B, begin, end, best_axis, lo3[best_axis], scale3[best_axis], best_bin, 0, &left,
+				&right);
 		spans = true;
 		if (mid == begin || mid == end) {
 			mid = begin + n / 2;
@@ -529,7 +500,7 @@ static void build_all(struct bvh_ctx *B, uint32_t n)
 	B->flag = cancel_cur.flag;
 	B->n_task = 1;
 	B->busy = 0;
-	B->task[0] = (struct bvh_task){ root, 0, 0, n, 0 };
+	B->task[0] = (struct bvh_task){ 0, 0, n, 0, root };
 	pthread_t th[BVH_MAX_THREADS];
 	unsigned started = 0;
 	for (unsigned k = 1; k < B->n_threads; k++)
@@ -564,9 +535,8 @@ static uint32_t collapse(const struct bvh_node *nodes, uint32_t ni, struct bvh4 
 			const struct bvh_node *x = &nodes[ch[c]];
 			if (x->n)
 				continue;
-			_Alignas(16) float l[4] = { x->b[0], x->b[1], x->b[2], 0 };
-			_Alignas(16) float h[4] = { x->b[3], x->b[4], x->b[5], 0 };
-			double a = f4_area(f4_load(l), f4_load(h));
+			struct geom_box bx = { v3(x->b[0], x->b[1], x->b[2]), v3(x->b[3], x->b[4], x->b[5]) };
+			double a = box_area(bx);
 			if (a > best_area)
 				best_area = a, best = c;
 		}
@@ -602,32 +572,6 @@ int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t 
 	return bvh_build_ex(b, boxes, n, perm, max_leaf, false);
 }
 
-/* The items' records, in index order (perm the identity); NULL when out
- * of memory, or garbage when a cancel poll said true. */
-static struct bvh_rec *make_recs(const struct geom_box *boxes, const float (*fboxes)[6], uint32_t n)
-{
-	struct bvh_rec *rec = aligned_alloc(16, (size_t)n * sizeof *rec);
-	if (!rec)
-		return NULL;
-	for (uint32_t i = 0; i < n; i++) {
-		if (cancel_poll_every(i))
-			break;
-		struct bvh_rec *r = &rec[i];
-		if (boxes) {
-			const struct geom_box *g = &boxes[i];
-			r->lo[0] = round_down(g->lo.x), r->lo[1] = round_down(g->lo.y), r->lo[2] = round_down(g->lo.z);
-			r->hi[0] = round_up(g->hi.x), r->hi[1] = round_up(g->hi.y), r->hi[2] = round_up(g->hi.z);
-		} else {
-			memcpy(r->lo, fboxes[i], 3 * sizeof(float));
-			memcpy(r->hi, fboxes[i] + 3, 3 * sizeof(float));
-		}
-		r->lo[3] = r->hi[3] = 0;
-		r->hi[3] = (float)f4_area(f4_load(r->lo), f4_load(r->hi));
-		memcpy(&r->lo[3], &i, sizeof i);
-	}
-	return rec;
-}
-
 static int build(struct bvh *b, const struct geom_box *boxes, float (*fboxes)[6], uint32_t n, uint32_t *perm,
 		 uint32_t max_leaf, bool pack)
 {
@@ -636,22 +580,22 @@ static int build(struct bvh *b, const struct geom_box *boxes, float (*fboxes)[6]
 		return 0;
 	struct bvh_ctx B;
 	memset(&B, 0, sizeof B);
+	B.boxes = boxes;
+	B.fboxes = fboxes;
+	B.perm = perm;
 	atomic_init(&B.n_nodes, 1);
 	atomic_init(&B.gave_up, 0);
 	B.max_leaf = max_leaf ? max_leaf : 1;
 	B.pack = pack;
-	B.rec = make_recs(boxes, (const float(*)[6])fboxes, n);
-	free(fboxes); /* bvh_build_f's: the records hold their values now */
-	B.nodes = B.rec ? malloc((size_t)2 * n * sizeof *B.nodes) : NULL;
+	B.nodes = malloc((size_t)2 * n * sizeof *B.nodes);
 	if (!B.nodes) {
-		free(B.rec);
+		free(fboxes);
 		return -1;
 	}
-	if (!cancel_seen())
-		build_all(&B, n);
-	for (uint32_t i = 0; i < n && !cancel_seen(); i++)
-		memcpy(&perm[i], &B.rec[i].lo[3], sizeof perm[i]);
-	free(B.rec);
+	for (uint32_t i = 0; i < n; i++)
+		perm[i] = i;
+	build_all(&B, n);
+	free(fboxes); /* bvh_build_f's: the collapse below reads the binary nodes only */
 	if (cancel_seen()) {
 		free(B.nodes);
 		return BVH_CANCELLED;

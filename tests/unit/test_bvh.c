@@ -628,6 +628,8 @@ static void big_leaf(void)
 {
 	struct scene *s = scene_new();
 	struct scene_error err;
+	struct geom_box bx[1 + CHAIN + CLUSTER];
+	uint32_t perm[1 + CHAIN + CLUSTER];
 	for (int i = 0; i < 1 + CHAIN + CLUSTER; i++) {
 		double c = i == 0 ? -1 : i <= CHAIN ? ldexp(1, -8 * (i - 1)) : ldexp(i - CHAIN - 1, -700);
 		struct scene_object o;
@@ -638,32 +640,18 @@ static void big_leaf(void)
 		uint32_t id;
 		CHECK(scene_add_object(s, &o, &id, &err) == 0);
 		CHECK(scene_add_root(s, id, &err) == 0);
+		bx[i].lo = v3(c, 0, 0);
+		bx[i].hi = v3(c, 1e-3, 1e-3);
 	}
-	/* the builder alone makes the big leaf. It bins over float boxes (the
-	 * doubles rounded outward), where the chain above is one place; so
-	 * its boxes are a float chain instead: planes at x = +-2^(120 - 5k)
-	 * (32 times closer to 0 a level: binning peels one off a level, the
-	 * two sides in turn, for 2 x 50 levels) around the same cluster at
-	 * x = i 2^-149 (float subnormals). */
-	enum { FCHAIN = 100, FN = FCHAIN + CLUSTER };
-	struct geom_box *fbx = malloc(FN * sizeof *fbx);
-	uint32_t *fperm = malloc(FN * sizeof *fperm);
-	CHECK(fbx && fperm);
-	for (int i = 0; i < FN; i++) {
-		double c = i < FCHAIN ? (i % 2 ? -1 : 1) * ldexp(1, 120 - 5 * (i / 2)) : ldexp(i - FCHAIN, -149);
-		fbx[i].lo = v3(c, 0, 0);
-		fbx[i].hi = v3(c, 1e-3, 1e-3);
-	}
+	/* the builder alone makes the big leaf */
 	struct bvh b;
-	CHECK(bvh_build(&b, fbx, FN, fperm, 4) == 0);
+	CHECK(bvh_build(&b, bx, 1 + CHAIN + CLUSTER, perm, 4) == 0);
 	uint32_t biggest = 0;
 	for (uint32_t ni = 0; ni < b.n_nodes4; ni++)
 		for (int c = 0; c < 4; c++)
 			if (!isnan(b.nodes[ni].lo[0][c]) && b.nodes[ni].n[c] > biggest)
 				biggest = b.nodes[ni].n[c];
 	printf("big leaf: %u items in the biggest leaf\n", biggest);
-	free(fbx);
-	free(fperm);
 	CHECK(biggest > 4 * 64);
 	bvh_free(&b);
 
@@ -762,65 +750,6 @@ static void tri_margins(void)
 	}
 }
 
-/*
- * The tree does not depend on the build threads (bvh_set_threads): 40000
- * random boxes (enough for subtrees on other threads), some big, built
- * on 1, 2 and 3 threads, twice each, as doubles and as floats: the same
- * 4-wide nodes byte for byte and the same leaf order.
- */
-#define SAME_N 40000
-static void same_tree_any_threads(void)
-{
-	struct geom_box *bx = malloc(SAME_N * sizeof *bx);
-	uint32_t *perm0 = malloc(SAME_N * sizeof *perm0), *perm = malloc(SAME_N * sizeof *perm);
-	CHECK(bx && perm0 && perm);
-	for (uint32_t i = 0; i < SAME_N; i++) {
-		vec3 c = v3(rng_uniform(33, 4ull * i), rng_uniform(33, 4ull * i + 1), rng_uniform(33, 4ull * i + 2));
-		double r = i % 997 == 0 ? 0.4 : 0.01 * rng_uniform(33, 4ull * i + 3);
-		bx[i].lo = v3_sub(c, v3(r, r, r));
-		bx[i].hi = v3_add(c, v3(r, 0.5 * r, r));
-	}
-	for (int f = 0; f < 2; f++) {
-		struct bvh b0;
-		bool have0 = false;
-		for (unsigned th = 1; th <= 3; th++)
-			for (int rep = 0; rep < 2; rep++) {
-				bvh_set_threads(th);
-				struct bvh b;
-				if (f) {
-					float(*fbx)[6] = malloc(SAME_N * sizeof *fbx);
-					CHECK(fbx != NULL);
-					for (uint32_t i = 0; i < SAME_N; i++) {
-						fbx[i][0] = (float)bx[i].lo.x, fbx[i][1] = (float)bx[i].lo.y;
-						fbx[i][2] = (float)bx[i].lo.z, fbx[i][3] = (float)bx[i].hi.x;
-						fbx[i][4] = (float)bx[i].hi.y, fbx[i][5] = (float)bx[i].hi.z;
-					}
-					CHECK(bvh_build_f(&b, fbx, SAME_N, have0 ? perm : perm0, 4, false) == 0);
-				} else {
-					CHECK(bvh_build(&b, bx, SAME_N, have0 ? perm : perm0, 4) == 0);
-				}
-				if (!have0) {
-					b0 = b;
-					have0 = true;
-					CHECK(b0.n_nodes4 > 1000);
-					continue;
-				}
-				CHECK(b.n_nodes == b0.n_nodes && b.n_nodes4 == b0.n_nodes4 && b.root_n == b0.root_n);
-				CHECK(memcmp(b.root_b, b0.root_b, sizeof b.root_b) == 0);
-				CHECK(b.n_nodes4 == b0.n_nodes4 &&
-				      memcmp(b.nodes, b0.nodes, (size_t)b.n_nodes4 * sizeof *b.nodes) == 0);
-				CHECK(memcmp(perm, perm0, SAME_N * sizeof *perm) == 0);
-				bvh_free(&b);
-			}
-		bvh_free(&b0);
-	}
-	bvh_set_threads(0);
-	printf("same tree on 1, 2 and 3 build threads (doubles and floats)\n");
-	free(bx);
-	free(perm0);
-	free(perm);
-}
-
 int main(void)
 {
 	const char *full = getenv("PORTRAY_TEST_FULL");
@@ -828,7 +757,6 @@ int main(void)
 		n_rays = N_RAYS_FULL;
 	builder();
 	big_leaf();
-	same_tree_any_threads();
 	tri_margins();
 	far_away();
 	mixed();
