@@ -833,33 +833,57 @@ static inline int block_rays(const struct surf sf[4], const bool ok[4], int n, v
 	return m;
 }
 
+/* The start of both shadow packet paths: pre[]'s bits cleared (its first,
+ * the caller's); returns how many of the first lights they look at (0 with
+ * shadows off). */
+static uint32_t packet_lights(const struct shade_ctx *c, struct shadow_pre pre[4])
+{
+	for (int k = 0; k < 4; k++)
+		pre[k].known = pre[k].occ = pre[k].tknown = pre[k].thit = 0;
+	if (c->s->image.no_shadows)
+		return 0;
+	return c->n_lights < SHADE_PRE_LIGHTS ? c->n_lights : SHADE_PRE_LIGHTS;
+}
+
+/* Light i's shadow rays go as packets: a point light that casts shadows. */
+static bool packet_light(const struct shade_ctx *c, uint32_t i)
+{
+	const struct scene_light *l = c->lights[i].l;
+	return l->shape == LIGHT_POINT && !l->no_shadows;
+}
+
+/* The m (1..4) shadow rays r[0..m) of hits who[0..m) toward light i as one
+ * occlusion packet (lanes past m repeat the last ray), their answers into
+ * pre. */
+static void occlusion_packet(const struct shade_ctx *c, uint32_t i, struct ray r[4], const int who[4], int m,
+			     struct shadow_pre pre[4])
+{
+	for (int j = m; j < 4; j++)
+		r[j] = r[m - 1];
+	bool occ[4];
+	accel_occluded4(c->a, r, occ, light_hint(c, i));
+	for (int j = 0; j < m; j++) {
+		pre[who[j]].known |= 1u << i;
+		pre[who[j]].occ |= (uint32_t)occ[j] << i;
+	}
+}
+
 static void shadow_packets(const struct shade_ctx *c, const struct surf sf[4], const bool ok[4], int n,
 			   struct shadow_pre pre[4])
 {
-	for (int k = 0; k < 4; k++) {
-		pre[k].known = pre[k].occ = pre[k].tknown = pre[k].thit = 0;
+	for (int k = 0; k < 4; k++)
 		pre[k].first = NULL;
-	}
-	if (c->s->image.no_shadows)
-		return;
-	uint32_t n_lights = c->n_lights < SHADE_PRE_LIGHTS ? c->n_lights : SHADE_PRE_LIGHTS;
+	uint32_t n_lights = packet_lights(c, pre);
 	for (uint32_t i = 0; i < n_lights; i++) {
-		const struct scene_light *l = c->lights[i].l;
-		if (l->shape != LIGHT_POINT || l->no_shadows)
+		if (!packet_light(c, i))
 			continue;
+		const struct scene_light *l = c->lights[i].l;
 		struct ray r[4];
 		int who[4];
 		int m = block_rays(sf, ok, n, l->position, r, who);
 		if (!m)
 			continue;
-		for (int j = m; j < 4; j++)
-			r[j] = r[m - 1];
-		bool occ[4];
-		accel_occluded4(c->a, r, occ, light_hint(c, i));
-		for (int j = 0; j < m; j++) {
-			pre[who[j]].known |= 1u << i;
-			pre[who[j]].occ |= (uint32_t)occ[j] << i;
-		}
+		occlusion_packet(c, i, r, who, m, pre);
 	}
 }
 
@@ -875,15 +899,11 @@ static void shadow_packets(const struct shade_ctx *c, const struct surf sf[4], c
 static void shadow_packets_transparent(const struct shade_ctx *c, const struct surf sf[4], const bool ok[4], int n,
 				       struct shadow_pre pre[4])
 {
-	for (int k = 0; k < 4; k++)
-		pre[k].known = pre[k].occ = pre[k].tknown = pre[k].thit = 0;
-	if (c->s->image.no_shadows)
-		return;
-	uint32_t n_lights = c->n_lights < SHADE_PRE_LIGHTS ? c->n_lights : SHADE_PRE_LIGHTS;
+	uint32_t n_lights = packet_lights(c, pre);
 	for (uint32_t i = 0; i < n_lights; i++) {
-		const struct scene_light *l = c->lights[i].l;
-		if (l->shape != LIGHT_POINT || l->no_shadows)
+		if (!packet_light(c, i))
 			continue;
+		const struct scene_light *l = c->lights[i].l;
 		struct ray r[4];
 		int who[4];
 		int m = block_rays(sf, ok, n, l->position, r, who);
@@ -914,14 +934,7 @@ static void shadow_packets_transparent(const struct shade_ctx *c, const struct s
 		m = q;
 		if (!m)
 			continue;
-		for (int j = m; j < 4; j++)
-			r[j] = r[m - 1];
-		bool occ[4];
-		accel_occluded4(c->a, r, occ, light_hint(c, i));
-		for (int j = 0; j < m; j++) {
-			pre[who[j]].known |= 1u << i;
-			pre[who[j]].occ |= (uint32_t)occ[j] << i;
-		}
+		occlusion_packet(c, i, r, who, m, pre);
 	}
 }
 

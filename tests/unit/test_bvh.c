@@ -30,6 +30,7 @@
 #include "common/parse.h"
 #include "common/rng.h"
 #include "tests/unit/check.h"
+#include "tests/unit/same_hit.h"
 
 /* rays per scene: N_RAYS_FULL with PORTRAY_TEST_FULL=1 in the environment */
 #define N_RAYS_QUICK 10000
@@ -52,16 +53,6 @@ struct job {
 	int packets, packet_mismatch;
 	uint32_t hint; /* last-blocker hint carried from packet to packet */
 };
-
-/* The same hit, bit for bit (what accel_intersect4 promises). */
-static bool same_hit(bool b1, const struct hit *h1, bool b2, const struct hit *h2)
-{
-	if (b1 != b2)
-		return false;
-	return !b1 || (memcmp(&h1->t, &h2->t, sizeof h1->t) == 0 && memcmp(&h1->p, &h2->p, sizeof h1->p) == 0 &&
-		       memcmp(&h1->n, &h2->n, sizeof h1->n) == 0 && memcmp(&h1->ng, &h2->ng, sizeof h1->ng) == 0 &&
-		       h1->object == h2->object && h1->material == h2->material);
-}
 
 /* accel_occluded4 and accel_occluded_hint over r[0..4) against
  * accel_occluded, ray by ray, with the hint the job carries (whatever

@@ -22,19 +22,10 @@
 #include "common/rng.h"
 #include "common/scene.h"
 #include "tests/unit/check.h"
+#include "tests/unit/same_hit.h"
 
 #define N_PATCHES 64
 #define N_RAYS 24000
-
-/* The same hit, bit for bit. */
-static bool same_hit(bool b1, const struct hit *h1, bool b2, const struct hit *h2)
-{
-	if (b1 != b2)
-		return false;
-	return !b1 || (memcmp(&h1->t, &h2->t, sizeof h1->t) == 0 && memcmp(&h1->p, &h2->p, sizeof h1->p) == 0 &&
-		       memcmp(&h1->n, &h2->n, sizeof h1->n) == 0 && memcmp(&h1->ng, &h2->ng, sizeof h1->ng) == 0 &&
-		       h1->object == h2->object && h1->material == h2->material);
-}
 
 struct patch {
 	vec3 v[6];
