@@ -3,6 +3,7 @@
  */
 #include "proto/sha256.h"
 
+#include <stdatomic.h>
 #include <string.h>
 
 #if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
@@ -122,8 +123,8 @@ __attribute__((target("sha,sse4.1,ssse3"))) static void sha256_blocks_ni(uint32_
 /* 1: the CPU has SHA-NI (and the SSSE3 and SSE4.1 it comes with), 0: not. */
 static int sha256_have_ni(void)
 {
-	static int have = -1; /* a race only computes the same answer twice */
-	if (have < 0) {
+	static atomic_int have = -1; /* a race only computes the same answer twice */
+	if (atomic_load_explicit(&have, memory_order_relaxed) < 0) {
 		unsigned a, b, c, d;
 		int ni = 0;
 		if (__get_cpuid_max(0, NULL) >= 7 && __get_cpuid(1, &a, &b, &c, &d) && (c & bit_SSSE3) &&
@@ -131,9 +132,9 @@ static int sha256_have_ni(void)
 			__cpuid_count(7, 0, a, b, c, d);
 			ni = (b >> 29) & 1;
 		}
-		have = ni;
+		atomic_store_explicit(&have, ni, memory_order_relaxed);
 	}
-	return have;
+	return atomic_load_explicit(&have, memory_order_relaxed);
 }
 #endif
 

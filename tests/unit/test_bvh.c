@@ -148,6 +148,20 @@ static void *run_rays(void *arg)
 	return NULL;
 }
 
+/* run_rays of rays 0..to aimed into the box lo..hi, on this thread. */
+static struct job rays_in(const struct accel *a, vec3 lo, vec3 hi, uint64_t seed, int to)
+{
+	struct job j;
+	memset(&j, 0, sizeof j);
+	j.a = a;
+	j.lo = lo;
+	j.hi = hi;
+	j.seed = seed;
+	j.to = to;
+	run_rays(&j);
+	return j;
+}
+
 static void agree(const char *path)
 {
 	struct scene *s;
@@ -463,13 +477,9 @@ static void many_instances(void)
 	CHECK(scene_add_root(s, pid, &err) == 0);
 	struct accel *a;
 	CHECK(accel_build(s, &a, &err) == 0);
-	struct job j;
-	memset(&j, 0, sizeof j);
-	j.a = a;
-	CHECK(accel_bounds(a, &j.lo, &j.hi));
-	j.seed = rng_seed(7, 1, 2);
-	j.to = 6 * n_rays / 100;
-	run_rays(&j);
+	vec3 lo, hi;
+	CHECK(accel_bounds(a, &lo, &hi));
+	struct job j = rays_in(a, lo, hi, rng_seed(7, 1, 2), 6 * n_rays / 100);
 	printf("1,500 instances in packed leaves, unbounded instances, a plane: %d rays, %d hits, %d mismatches\n",
 	       j.to, j.hits, j.mismatch);
 	CHECK(j.mismatch == 0);
@@ -511,14 +521,7 @@ static void instances_beyond_floats(void)
 	}
 	struct accel *a;
 	CHECK(accel_build(s, &a, &err) == 0);
-	struct job j;
-	memset(&j, 0, sizeof j);
-	j.a = a;
-	j.lo = v3(-2, -2, -2);
-	j.hi = v3(12, 12, 12);
-	j.seed = rng_seed(10, 1, 2);
-	j.to = 6 * n_rays / 100;
-	run_rays(&j);
+	struct job j = rays_in(a, v3(-2, -2, -2), v3(12, 12, 12), rng_seed(10, 1, 2), 6 * n_rays / 100);
 	printf("1,200 instances, one at 2e31: %d rays, %d hits, %d mismatches\n", j.to, j.hits, j.mismatch);
 	CHECK(j.mismatch == 0);
 	CHECK(j.hits > j.to / 10);
