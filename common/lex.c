@@ -10,6 +10,7 @@
 #include <fcntl.h>
 #include <math.h>
 #include <pthread.h>
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -110,6 +111,19 @@ const char *lex_keyword_name(enum keyword kw)
 
 static int is_digit(char c) { return c >= '0' && c <= '9'; }
 
+static const double lex_pow10[23] = {
+	1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+	1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+};
+
+/*
+ * The digits are gathered as they are checked: m holds the first 19
+ * significant ones and e10 the power of ten that scales them. When m fits
+ * in 53 bits, no digit was dropped and |e10| <= 22, m and 10^|e10| are
+ * exact doubles and one IEEE product or quotient is the correctly rounded
+ * value, which is strtod's (Clinger's fast path); anything else goes to
+ * strtod.
+ */
 int lex_number(const char *w, size_t n, double *v)
 {
 	size_t i = 0, digits = 0;
@@ -117,34 +131,65 @@ int lex_number(const char *w, size_t n, double *v)
 	size_t j = (n > 0 && (w[0] == '+' || w[0] == '-')) ? 1 : 0;
 	if (!(j < n && (is_digit(w[j]) || (w[j] == '.' && j + 1 < n && is_digit(w[j + 1])))))
 		return NUM_NO;
+	uint64_t m = 0;
+	int nsig = 0;
+	long e10 = 0;
+	bool dropped = false;
 	i = j;
-	while (i < n && is_digit(w[i]))
-		i++, digits++;
+	for (; i < n && is_digit(w[i]); i++, digits++) {
+		unsigned d = (unsigned)(w[i] - '0');
+		if (nsig < 19) {
+			m = m * 10 + d;
+			nsig += m != 0;
+		} else {
+			e10++;
+			dropped |= d != 0;
+		}
+	}
 	if (i < n && w[i] == '.') {
-		i++;
-		while (i < n && is_digit(w[i]))
-			i++, digits++;
+		for (i++; i < n && is_digit(w[i]); i++, digits++) {
+			unsigned d = (unsigned)(w[i] - '0');
+			if (nsig < 19) {
+				m = m * 10 + d;
+				nsig += m != 0;
+				e10--;
+			} else {
+				dropped |= d != 0;
+			}
+		}
 	}
 	if (digits == 0)
 		return NUM_BAD;
 	if (i < n && (w[i] == 'e' || w[i] == 'E')) {
 		i++;
+		bool eneg = false;
 		if (i < n && (w[i] == '+' || w[i] == '-'))
-			i++;
+			eneg = w[i++] == '-';
 		size_t ed = 0;
-		while (i < n && is_digit(w[i]))
-			i++, ed++;
+		long e = 0;
+		for (; i < n && is_digit(w[i]); i++, ed++)
+			if (e < 100000000)
+				e = e * 10 + (w[i] - '0');
 		if (ed == 0)
 			return NUM_BAD;
+		e10 += eneg ? -e : e;
 	}
 	if (i != n || n > LIM_TOKEN_LEN)
 		return NUM_BAD;
-	/* the grammar above is a subset of strtod's, so strtod reads it all and
-	 * rounds correctly; copy to terminate it */
-	char tmp[LIM_TOKEN_LEN + 1];
-	memcpy(tmp, w, n);
-	tmp[n] = '\0';
-	double d = strtod(tmp, NULL);
+	double d;
+	if (!dropped && m <= (1ull << 53) && e10 >= -22 && e10 <= 22) {
+		d = (double)m;
+		d = e10 < 0 ? d / lex_pow10[-e10] : d * lex_pow10[e10];
+		if (w[0] == '-')
+			d = -d;
+	} else {
+		/* the grammar above is a subset of strtod's, so strtod reads it
+		 * all and rounds correctly; copy to terminate it */
+		char tmp[LIM_TOKEN_LEN + 1];
+		memcpy(tmp, w, n);
+		tmp[n] = '\0';
+		d = strtod(tmp, NULL);
+	}
 	if (!isfinite(d))
 		return NUM_BAD;
 	*v = d;

@@ -3,6 +3,8 @@
  * keywords in any case and their aliases, limits and errors.
  */
 #include <errno.h>
+#include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -108,6 +110,59 @@ static void test_numbers(void)
 	CHECK(t.num == NUM_OK && t.value == 3);
 	t = nth("radius 2;", 1);
 	CHECK(t.num == NUM_OK && t.value == 2 && t.len == 1);
+}
+
+/* A tiny deterministic generator for the strtod comparison. */
+static uint64_t num_rng = 0x9e3779b97f4a7c15ull;
+static unsigned num_next(unsigned n)
+{
+	num_rng ^= num_rng << 13, num_rng ^= num_rng >> 7, num_rng ^= num_rng << 17;
+	return (unsigned)(num_rng % n);
+}
+
+/*
+ * lex_number's fast path (Clinger's: m < 2^53 exactly, |e10| <= 22) and
+ * its strtod fallback give strtod's value, sign of zero included, for
+ * numbers of every shape the grammar allows: leading and trailing zeros,
+ * up to 25 digits (more than 19 significant ones are dropped into e10),
+ * exponents from -330 to 330, halfway cases such as 9007199254740993.
+ */
+static void test_numbers_vs_strtod(void)
+{
+	const char *fixed[] = { "9007199254740992", "9007199254740993", "9007199254740994", "0.1", "-0", "-0.0e5",
+				"1e22", "1e23", "1e-22", "1e-23", "123456789012345678901234", "0.000000000000000000001",
+				"4.9406564584124654e-324", "2.2250738585072011e-308", "1.7976931348623157e308",
+				"00000000000000000000001.5", "1234567890123456789", "12345678901234567890" };
+	char buf[64];
+	int bad = 0;
+	for (int k = 0; k < 20000 + (int)(sizeof fixed / sizeof fixed[0]); k++) {
+		size_t n = 0;
+		if (k < (int)(sizeof fixed / sizeof fixed[0])) {
+			n = strlen(fixed[k]);
+			memcpy(buf, fixed[k], n + 1);
+		} else {
+			if (num_next(3) == 0)
+				buf[n++] = num_next(2) ? '-' : '+';
+			unsigned ip = num_next(12), fp = num_next(3) ? num_next(14) : 0;
+			for (unsigned i = 0; i < ip; i++)
+				buf[n++] = (char)('0' + (num_next(4) ? num_next(10) : 0));
+			if (fp || ip == 0) {
+				buf[n++] = '.';
+				for (unsigned i = 0; i < fp + (ip == 0); i++)
+					buf[n++] = (char)('0' + num_next(10));
+			}
+			if (num_next(3) == 0)
+				n += (size_t)snprintf(buf + n, sizeof buf - n, "e%d", (int)num_next(661) - 330);
+			buf[n] = '\0';
+		}
+		double v = 12345, want = strtod(buf, NULL);
+		int r = lex_number(buf, n, &v);
+		if (!isfinite(want))
+			bad += r != NUM_BAD;
+		else
+			bad += r != NUM_OK || memcmp(&v, &want, sizeof v) != 0;
+	}
+	CHECK(bad == 0);
 }
 
 static void test_keywords(void)
@@ -234,6 +289,7 @@ int main(void)
 	test_kinds_positions();
 	test_comments();
 	test_numbers();
+	test_numbers_vs_strtod();
 	test_keywords();
 	test_limits_and_errors();
 	test_read_file();
