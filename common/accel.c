@@ -1289,6 +1289,48 @@ static inline float lanes_min(__m128 v)
 	return _mm_cvtss_f32(v);
 }
 
+/*
+ * ray_box_init for four rays at once into rows (o[k][i]: ray i's o[k]):
+ * the same operations, the divisions and the widening two rays at a time
+ * (divpd and mulpd round as divsd and mulsd do; cvtpd2ps as cvtsd2ss), so
+ * the same floats bit for bit. The scale and the origin stay scalar.
+ */
+static void ray_box4(const struct trace tr[4], vec3 center, float o[3][4], float inv_near[3][4],
+		     float inv_far[3][4], double tscale[4])
+{
+	double s[4], d[3][4];
+	for (int i = 0; i < 4; i++) {
+		const struct trace *r = &tr[i];
+		double ax = fabs(r->d.x), ay = fabs(r->d.y), az = fabs(r->d.z);
+		double m = ax > ay ? ax : ay;
+		m = m > az ? m : az;
+		uint64_t bits;
+		memcpy(&bits, &m, sizeof bits);
+		int e = (int)(bits >> 52 & 0x7ff) - 1023;
+		if (e < -1000 || e > 1000)
+			e = 0; /* as ray_box_init */
+		s[i] = pow2(-e);
+		tscale[i] = pow2(e);
+		o[0][i] = (float)(r->o.x - center.x);
+		o[1][i] = (float)(r->o.y - center.y);
+		o[2][i] = (float)(r->o.z - center.z);
+		d[0][i] = r->d.x, d[1][i] = r->d.y, d[2][i] = r->d.z;
+	}
+	const __m128d one = _mm_set1_pd(1.0), tiny = _mm_set1_pd(1e-30), big = _mm_set1_pd(1e30);
+	const __m128d sign = _mm_set1_pd(-0.0), wn = _mm_set1_pd(1 - BOX_WIDEN), wf = _mm_set1_pd(1 + BOX_WIDEN);
+	for (int k = 0; k < 3; k++)
+		for (int h = 0; h < 4; h += 2) {
+			__m128d dk = _mm_mul_pd(_mm_loadu_pd(&d[k][h]), _mm_loadu_pd(&s[h]));
+			__m128d iv = _mm_div_pd(one, dk);
+			/* fabs(dk) > 1e-30 ? 1 / dk : copysign(1e30, dk) */
+			__m128d ok = _mm_cmpgt_pd(_mm_andnot_pd(sign, dk), tiny);
+			__m128d alt = _mm_or_pd(_mm_and_pd(sign, dk), big);
+			iv = _mm_or_pd(_mm_and_pd(ok, iv), _mm_andnot_pd(ok, alt));
+			_mm_storel_pi((__m64 *)(void *)&inv_near[k][h], _mm_cvtpd_ps(_mm_mul_pd(iv, wn)));
+			_mm_storel_pi((__m64 *)(void *)&inv_far[k][h], _mm_cvtpd_ps(_mm_mul_pd(iv, wf)));
+		}
+}
+
 /* The packet's side of the TRIANGLE PRE-TEST: one triangle against the
  * four rays, where they share kx, ky, kz (neighbouring rays do). */
 struct tri4 {
@@ -1545,15 +1587,8 @@ static void group_hit4(const struct accel *A, const struct group *g, struct trac
 	for (int i = 0; i < 4; i++) {
 		cand_init(&best[i]);
 		found[i] = group_hit_unbounded(A, g, &tr[i], &best[i], false);
-		struct ray_box q;
-		ray_box_init(&q, &tr[i], g->center);
-		for (int k = 0; k < 3; k++) {
-			o[k][i] = q.o[k];
-			inv_near[k][i] = q.inv_near[k];
-			inv_far[k][i] = q.inv_far[k];
-		}
-		P.tscale[i] = q.tscale;
 	}
+	ray_box4(tr, g->center, o, inv_near, inv_far, P.tscale);
 	for (int k = 0; k < 3; k++) {
 		P.o[k] = _mm_loadu_ps(o[k]);
 		P.inv_near[k] = _mm_loadu_ps(inv_near[k]);
@@ -1700,16 +1735,7 @@ out:
 static void ray4x_init(struct ray4x *P, const struct trace tr[4], const struct group *g)
 {
 	float o[3][4], inv_near[3][4], inv_far[3][4];
-	for (int i = 0; i < 4; i++) {
-		struct ray_box q;
-		ray_box_init(&q, &tr[i], g->center);
-		for (int k = 0; k < 3; k++) {
-			o[k][i] = q.o[k];
-			inv_near[k][i] = q.inv_near[k];
-			inv_far[k][i] = q.inv_far[k];
-		}
-		P->tscale[i] = q.tscale;
-	}
+	ray_box4(tr, g->center, o, inv_near, inv_far, P->tscale);
 	for (int k = 0; k < 3; k++) {
 		P->o[k] = _mm_loadu_ps(o[k]);
 		P->inv_near[k] = _mm_loadu_ps(inv_near[k]);
