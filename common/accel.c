@@ -1289,6 +1289,48 @@ static inline float lanes_min(__m128 v)
 	return _mm_cvtss_f32(v);
 }
 
+/*
+ * ray_box_init for four rays at once into rows (o[k][i]: ray i's o[k]):
+ * the same operations, the divisions and the widening two rays at a time
+ * (divpd and mulpd round as divsd and mulsd do; cvtpd2ps as cvtsd2ss), so
+ * the same floats bit for bit. The scale and the origin stay scalar.
+ */
+static void ray_box4(const struct trace tr[4], vec3 center, float o[3][4], float inv_near[3][4],
+		     float inv_far[3][4], double tscale[4])
+{
+	double s[4], d[3][4];
+	for (int i = 0; i < 4; i++) {
+		const struct trace *r = &tr[i];
+		double ax = fabs(r->d.x), ay = fabs(r->d.y), az = fabs(r->d.z);
+		double m = ax > ay ? ax : ay;
+		m = m > az ? m : az;
+		uint64_t bits;
+		memcpy(&bits, &m, sizeof bits);
+		int e = (int)(bits >> 52 & 0x7ff) - 1023;
+		if (e < -1000 || e > 1000)
+			e = 0; /* as ray_box_init */
+		s[i] = pow2(-e);
+		tscale[i] = pow2(e);
+		o[0][i] = (float)(r->o.x - center.x);
+		o[1][i] = (float)(r->o.y - center.y);
+		o[2][i] = (float)(r->o.z - center.z);
+		d[0][i] = r->d.x, d[1][i] = r->d.y, d[2][i] = r->d.z;
+	}
+	const __m128d one = _mm_set1_pd(1.0), tiny = _mm_set1_pd(1e-30), big = _mm_set1_pd(1e30);
+	const __m128d sign = _mm_set1_pd(-0.0), wn = _mm_set1_pd(1 - BOX_WIDEN), wf = _mm_set1_pd(1 + BOX_WIDEN);
+	for (int k = 0; k < 3; k++)
+		for (int h = 0; h < 4; h += 2) {
+			__m128d dk = _mm_mul_pd(_mm_loadu_pd(&d[k][h]), _mm_loadu_pd(&s[h]));
+			__m128d iv = _mm_div_pd(one, dk);
+			/* fabs(dk) > 1e-30 ? 1 / dk : copysign(1e30, dk) */
+			__m128d ok = _mm_cmpgt_pd(_mm_andnot_pd(sign, dk), tiny);
+			__m128d alt = _mm_or_pd(_mm_and_pd(sign, dk), big);
+			iv = _mm_or_pd(_mm_and_pd(ok, iv), _mm_andnot_pd(ok, alt));
+			_mm_storel_pi((__m64 *)(void *)&inv_near[k][h], _mm_cvtpd_ps(_mm_mul_pd(iv, wn)));
+			_mm_storel_pi((__m64 *)(void *)&inv_far[k][h], _mm_cvtpd_ps(_mm_mul_pd(iv, wf)));
+		}
+}
+
 /* The packet's side of the TRIANGLE PRE-TEST: one triangle against the
  * four rays, where they share kx, ky, kz (neighbouring rays do). */
 struct tri4 {
@@ -1534,6 +1576,130 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 	}
 }
 
+/*
+ * bvh_hit4 for four rays from one origin (the same floats in P->o's lanes):
+ * each node's children are tested against the packet as a whole, with the
+ * interval of the rays' inverses per axis. The plane less the origin, d,
+ * is the same float for every ray, and fl(d * x) is monotonic in x, so the
+ * smaller of d times the least and d times the greatest inverse is the
+ * least entry distance over the rays on that axis, exactly, and the larger
+ * of the far products the greatest exit; with the least tmin and greatest
+ * tmax over the rays, a child that any ray's own test (RAY_NODE) lets
+ * through passes. Leaves are tested for all four rays (the triangle
+ * pre-test and the exact tests decide), a subtree popped while its entry
+ * is within some ray's tmax.
+ */
+static inline __attribute__((always_inline)) void bvh_hit4o(const struct accel *A, const struct group *g,
+							    struct trace tr[4], struct cand best[4], bool found[4],
+							    const struct ray4x *P, const uint32_t oct)
+{
+	const struct bvh4 *nodes = g->bvh.nodes;
+	const uint32_t near[3] = { 12 * (oct & 1), 4 + 12 * (oct >> 1 & 1), 8 + 12 * (oct >> 2 & 1) };
+	const uint32_t far[3] = { 12 * (~oct & 1), 4 + 12 * (~oct >> 1 & 1), 8 + 12 * (~oct >> 2 & 1) };
+	float tmn[4], tmx[4];
+	for (int i = 0; i < 4; i++) {
+		tmn[i] = box_tmin(tr[i].tmin * P->tscale[i]);
+		tmx[i] = box_tmax(tr[i].tmax * P->tscale[i]);
+	}
+	__m128 o[3], nlo[3], nhi[3], flo[3], fhi[3];
+	for (int k = 0; k < 3; k++) {
+		o[k] = _mm_shuffle_ps(P->o[k], P->o[k], 0); /* the shared origin */
+		__m128 a = P->inv_near[k], b = P->inv_far[k];
+		__m128 a2 = _mm_shuffle_ps(a, a, _MM_SHUFFLE(1, 0, 3, 2)), b2 = _mm_shuffle_ps(b, b, _MM_SHUFFLE(1, 0, 3, 2));
+		__m128 amin = _mm_min_ps(a, a2), amax = _mm_max_ps(a, a2);
+		__m128 bmin = _mm_min_ps(b, b2), bmax = _mm_max_ps(b, b2);
+		nlo[k] = _mm_min_ps(amin, _mm_shuffle_ps(amin, amin, _MM_SHUFFLE(2, 3, 0, 1)));
+		nhi[k] = _mm_max_ps(amax, _mm_shuffle_ps(amax, amax, _MM_SHUFFLE(2, 3, 0, 1)));
+		flo[k] = _mm_min_ps(bmin, _mm_shuffle_ps(bmin, bmin, _MM_SHUFFLE(2, 3, 0, 1)));
+		fhi[k] = _mm_max_ps(bmax, _mm_shuffle_ps(bmax, bmax, _MM_SHUFFLE(2, 3, 0, 1)));
+	}
+	const __m128 tmin1 = _mm_set1_ps(lanes_min(_mm_loadu_ps(tmn)));
+	float tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), _mm_loadu_ps(tmx))); /* the greatest */
+	struct {
+		float t; /* the packet's least entry distance */
+		uint32_t idx, n;
+	} stack[3 * BVH_MAX_DEPTH + 4];
+	int sp = 0;
+	uint32_t idx = 0, n = 0;
+	uint32_t polls = ACCEL_POLL_POPS;
+	struct tri4 q; /* TRIANGLE PRE-TEST, set up at the first leaf that needs it */
+	bool q_ready = false;
+	for (;;) {
+		if (n) {
+			if (n & LEAF_BLOCK)
+				leaf4_block(g, tr, best, found, &g->tblk[idx], n & ~LEAF_BLOCK, 15, &q, &q_ready);
+			else
+				leaf4(A, g, tr, best, found, idx, n, 15, &q, &q_ready);
+			for (int i = 0; i < 4; i++)
+				tmx[i] = box_tmax(tr[i].tmax * P->tscale[i]);
+			tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), _mm_loadu_ps(tmx)));
+		} else {
+			const struct bvh4 *nd = &nodes[idx];
+			const float *b = (const float *)(const void *)nd; /* rows as in node4_hit */
+			__m128 t0 = tmin1, t1 = _mm_set1_ps(tmax);
+			for (int k = 0; k < 3; k++) {
+				__m128 dn = _mm_sub_ps(_mm_loadu_ps(b + near[k]), o[k]);
+				__m128 df = _mm_sub_ps(_mm_loadu_ps(b + far[k]), o[k]);
+				t0 = _mm_max_ps(t0, _mm_min_ps(_mm_mul_ps(dn, nlo[k]), _mm_mul_ps(dn, nhi[k])));
+				t1 = _mm_min_ps(t1, _mm_max_ps(_mm_mul_ps(df, flo[k]), _mm_mul_ps(df, fhi[k])));
+			}
+			int m = _mm_movemask_ps(_mm_cmple_ps(t0, t1));
+			if (m) {
+				float key[4];
+				_mm_storeu_ps(key, t0);
+				int cs[4], k = 0;
+				for (int c = 0; c < 4; c++) {
+					if (!(m >> c & 1))
+						continue;
+					int j = k++;
+					for (; j > 0 && key[cs[j - 1]] > key[c]; j--)
+						cs[j] = cs[j - 1];
+					cs[j] = c;
+				}
+				for (int j = k - 1; j >= 1; j--) {
+					stack[sp].idx = nd->idx[cs[j]];
+					stack[sp].n = nd->n[cs[j]];
+					stack[sp++].t = key[cs[j]];
+				}
+				idx = nd->idx[cs[0]];
+				n = nd->n[cs[0]];
+				continue;
+			}
+		}
+		if (__builtin_expect(--polls == 0, 0)) { /* CANCELLATION, as bvh_hit */
+			polls = ACCEL_POLL_POPS;
+			if (cancel_poll())
+				return;
+		}
+		/* pop the next subtree still in front of some ray's closest hit */
+		for (;;) {
+			if (sp == 0)
+				return;
+			sp--;
+			if (stack[sp].t <= tmax)
+				break;
+		}
+		idx = stack[sp].idx;
+		n = stack[sp].n;
+	}
+}
+
+/* bvh_hit4o, one copy per octant. */
+static __attribute__((noinline)) void group_hit4o(const struct accel *A, const struct group *g, struct trace tr[4],
+						  struct cand best[4], bool found[4], const struct ray4x *P, uint32_t oct)
+{
+	switch (oct) {
+	case 0: bvh_hit4o(A, g, tr, best, found, P, 0); break;
+	case 1: bvh_hit4o(A, g, tr, best, found, P, 1); break;
+	case 2: bvh_hit4o(A, g, tr, best, found, P, 2); break;
+	case 3: bvh_hit4o(A, g, tr, best, found, P, 3); break;
+	case 4: bvh_hit4o(A, g, tr, best, found, P, 4); break;
+	case 5: bvh_hit4o(A, g, tr, best, found, P, 5); break;
+	case 6: bvh_hit4o(A, g, tr, best, found, P, 6); break;
+	default: bvh_hit4o(A, g, tr, best, found, P, 7); break;
+	}
+}
+
 /* group_hit for four rays of one octant through g's tree (g->bvh.n_nodes4). */
 static void group_hit4(const struct accel *A, const struct group *g, struct trace tr[4], uint32_t oct,
 		       struct hit h[4], bool hit[4])
@@ -1545,34 +1711,36 @@ static void group_hit4(const struct accel *A, const struct group *g, struct trac
 	for (int i = 0; i < 4; i++) {
 		cand_init(&best[i]);
 		found[i] = group_hit_unbounded(A, g, &tr[i], &best[i], false);
-		struct ray_box q;
-		ray_box_init(&q, &tr[i], g->center);
-		for (int k = 0; k < 3; k++) {
-			o[k][i] = q.o[k];
-			inv_near[k][i] = q.inv_near[k];
-			inv_far[k][i] = q.inv_far[k];
-		}
-		P.tscale[i] = q.tscale;
 	}
+	ray_box4(tr, g->center, o, inv_near, inv_far, P.tscale);
 	for (int k = 0; k < 3; k++) {
 		P.o[k] = _mm_loadu_ps(o[k]);
 		P.inv_near[k] = _mm_loadu_ps(inv_near[k]);
 		P.inv_far[k] = _mm_loadu_ps(inv_far[k]);
-		for (int i = 0; i < 4; i++) {
-			P.lo[i][k] = _mm_set1_ps(o[k][i]);
-			P.lnear[i][k] = _mm_set1_ps(inv_near[k][i]);
-			P.lfar[i][k] = _mm_set1_ps(inv_far[k][i]);
-		}
 	}
-	switch (oct) { /* one copy of the loop per octant, as group_hit */
-	case 0: bvh_hit4(A, g, tr, best, found, &P, 0); break;
-	case 1: bvh_hit4(A, g, tr, best, found, &P, 1); break;
-	case 2: bvh_hit4(A, g, tr, best, found, &P, 2); break;
-	case 3: bvh_hit4(A, g, tr, best, found, &P, 3); break;
-	case 4: bvh_hit4(A, g, tr, best, found, &P, 4); break;
-	case 5: bvh_hit4(A, g, tr, best, found, &P, 5); break;
-	case 6: bvh_hit4(A, g, tr, best, found, &P, 6); break;
-	default: bvh_hit4(A, g, tr, best, found, &P, 7); break;
+	/* one origin, the same floats in every lane (eye rays of a pinhole
+	 * camera): the whole-packet node test, which needs no rows per ray */
+	bool same_o = memcmp(o[0], o[0] + 1, 3 * sizeof(float)) == 0 &&
+		      memcmp(o[1], o[1] + 1, 3 * sizeof(float)) == 0 && memcmp(o[2], o[2] + 1, 3 * sizeof(float)) == 0;
+	if (same_o) {
+		group_hit4o(A, g, tr, best, found, &P, oct);
+	} else {
+		for (int k = 0; k < 3; k++)
+			for (int i = 0; i < 4; i++) {
+				P.lo[i][k] = _mm_set1_ps(o[k][i]);
+				P.lnear[i][k] = _mm_set1_ps(inv_near[k][i]);
+				P.lfar[i][k] = _mm_set1_ps(inv_far[k][i]);
+			}
+		switch (oct) { /* one copy of the loop per octant, as group_hit */
+		case 0: bvh_hit4(A, g, tr, best, found, &P, 0); break;
+		case 1: bvh_hit4(A, g, tr, best, found, &P, 1); break;
+		case 2: bvh_hit4(A, g, tr, best, found, &P, 2); break;
+		case 3: bvh_hit4(A, g, tr, best, found, &P, 3); break;
+		case 4: bvh_hit4(A, g, tr, best, found, &P, 4); break;
+		case 5: bvh_hit4(A, g, tr, best, found, &P, 5); break;
+		case 6: bvh_hit4(A, g, tr, best, found, &P, 6); break;
+		default: bvh_hit4(A, g, tr, best, found, &P, 7); break;
+		}
 	}
 	for (int i = 0; i < 4; i++) {
 		hit[i] = found[i];
@@ -1700,16 +1868,7 @@ out:
 static void ray4x_init(struct ray4x *P, const struct trace tr[4], const struct group *g)
 {
 	float o[3][4], inv_near[3][4], inv_far[3][4];
-	for (int i = 0; i < 4; i++) {
-		struct ray_box q;
-		ray_box_init(&q, &tr[i], g->center);
-		for (int k = 0; k < 3; k++) {
-			o[k][i] = q.o[k];
-			inv_near[k][i] = q.inv_near[k];
-			inv_far[k][i] = q.inv_far[k];
-		}
-		P->tscale[i] = q.tscale;
-	}
+	ray_box4(tr, g->center, o, inv_near, inv_far, P->tscale);
 	for (int k = 0; k < 3; k++) {
 		P->o[k] = _mm_loadu_ps(o[k]);
 		P->inv_near[k] = _mm_loadu_ps(inv_near[k]);

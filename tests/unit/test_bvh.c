@@ -15,7 +15,8 @@
  * window (tmin > 0, finite tmax) and along an axis. The occlusion queries
  * (accel_occluded4, accel_occluded_hint, with hints carried over or made
  * up) answer as accel_occluded for those packets and for four shadow rays
- * toward one point (tmax 1). The builder's depth
+ * toward one point (tmax 1), and for packets whose lanes' directions
+ * differ in scale and in components near the inverse's cut-off. The builder's depth
  * limit leaves a leaf of hundreds of items (the traversals test such leaves
  * a chunk at a time: CANCELLATION in accel.c).
  */
@@ -744,6 +745,62 @@ static void tri_margins(void)
 	}
 }
 
+/*
+ * The packets' box set-up (ray_box4 in accel.c) lane by lane: four rays
+ * from one origin whose directions differ in scale (2^-500 to 2^60, and
+ * beyond the +-1000 exponent clamp), with components at and around the
+ * 1e-30 cut-off below which an inverse becomes +-1e30, zero components,
+ * so that the two lanes of each divpd take different branches. Every
+ * ray's hit and occlusion are accel_intersect's and accel_occluded's.
+ */
+static void packet_setup(void)
+{
+	struct scene *s;
+	struct scene_error err;
+	CHECK(parse_files(NULL, "tests/data/spd/tetra_s4.sce", &s, &err) == 0);
+	struct accel *a;
+	CHECK(accel_build(s, &a, &err) == 0);
+	vec3 lo, hi;
+	CHECK(accel_bounds(a, &lo, &hi));
+	static const double scale[] = { 1, 0x1p-60, 0x1p60, 0x1p-500, 1e305, 0x1p-3 };
+	static const double tiny[] = { 0, 1e-30, 1e-31, 2e-30, 5e-31, 1e-300 };
+	int mismatch = 0, hits = 0;
+	for (int k = 0; k < 3000; k++) {
+		vec3 o = v3_add(hi, v3(1, 1, 1)); /* above a corner: every target ahead */
+		vec3 t = v3(lo.x + (hi.x - lo.x) * rng_uniform(41, 3ull * k), lo.y + (hi.y - lo.y) * rng_uniform(41, 3ull * k + 1),
+			    lo.z + (hi.z - lo.z) * rng_uniform(41, 3ull * k + 2));
+		struct ray r[4];
+		for (int l = 0; l < 4; l++) {
+			vec3 d = v3_sub(t, o);
+			int axis = (k + l) % 3;
+			double e = -tiny[(k + 2 * l) % 6]; /* negative as the rest of d: one octant */
+			if (k % 4 != 0) /* one axis at or near the cut-off */
+				d = axis == 0 ? v3(e, d.y, d.z) : axis == 1 ? v3(d.x, e, d.z) : v3(d.x, d.y, e);
+			if (e == 0)
+				d = axis == 0 ? v3(-0.0, d.y, d.z) : axis == 1 ? v3(d.x, -0.0, d.z) : v3(d.x, d.y, -0.0);
+			d = v3_scale(d, scale[(k + l) % 6]);
+			r[l] = (struct ray){ o, d, 0, INFINITY };
+		}
+		struct hit h4[4], h1;
+		bool hit4[4], occ4[4];
+		uint32_t hint = ACCEL_NO_HINT;
+		accel_intersect4(a, r, h4, hit4);
+		accel_occluded4(a, r, occ4, &hint);
+		for (int l = 0; l < 4; l++) {
+			bool b1 = accel_intersect(a, &r[l], &h1);
+			mismatch += !same_hit(b1, &h1, hit4[l], &h4[l]);
+			mismatch += occ4[l] != accel_occluded(a, &r[l]);
+			hits += b1;
+		}
+	}
+	printf("packet set-up (scales 2^-500 to 1e305, components near 1e-30): 12000 rays, %d hits, %d unlike single rays\n",
+	       hits, mismatch);
+	CHECK(mismatch == 0);
+	CHECK(hits > 500);
+	accel_free(a);
+	scene_free(s);
+}
+
 int main(void)
 {
 	const char *full = getenv("PORTRAY_TEST_FULL");
@@ -752,6 +809,7 @@ int main(void)
 	builder();
 	big_leaf();
 	tri_margins();
+	packet_setup();
 	far_away();
 	mixed();
 	many_instances();
