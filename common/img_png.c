@@ -337,6 +337,14 @@ struct deflate {
 	struct obuf *o;
 };
 
+/* Word-at-a-time loads (match comparison, hashing) where the byte order
+ * makes them easy. */
+#if defined(__GNUC__) && defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#define IMG_WORD_COMPARE 1
+#else
+#define IMG_WORD_COMPARE 0
+#endif
+
 static inline uint32_t hash3(const uint8_t *p)
 {
 	uint32_t v = (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16;
@@ -352,12 +360,70 @@ static inline void insert(struct deflate *z, size_t pos)
 	z->head[h] = (uint32_t)pos + 1;
 }
 
-/* Word-at-a-time match comparison where the byte order makes it easy. */
-#if defined(__GNUC__) && defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-#define IMG_WORD_COMPARE 1
-#else
-#define IMG_WORD_COMPARE 0
+
+/* prev[p] = p (the position before p, plus one) for p in [from, to): the
+ * chain of a run of positions that all hash alike. */
+static void link_each(uint32_t *prev, size_t from, size_t to)
+{
+	while (from < to) {
+		size_t off = from & (WSIZE - 1), m = WSIZE - off < to - from ? WSIZE - off : to - from;
+		uint32_t *d = prev + off, v = (uint32_t)from;
+		for (size_t i = 0; i < m; i++)
+			d[i] = v + (uint32_t)i;
+		from += m;
+	}
+}
+
+/*
+ * insert() for every position in [from, to): what a match covers. The
+ * chains come out exactly as one insert() at a time would make them:
+ *   - four positions from one little-endian 8-byte load, each one's three
+ *     bytes being hash3's value;
+ *   - where the 8 bytes are one value repeated (flat areas, the common
+ *     case), the run is followed 8 bytes at a time; all its positions
+ *     but the last two share one hash, so each one's chain link is simply
+ *     the position before it (link_each).
+ * Near the end of the input (fewer than 8 bytes to read) insert() itself.
+ */
+static inline void insert_run(struct deflate *z, size_t from, size_t to)
+{
+	size_t q = from;
+#if IMG_WORD_COMPARE
+	const uint8_t *in = z->in;
+	uint32_t *head = z->head, *prev = z->prev;
+	size_t n = z->n;
+	while (q + 4 <= to && q + 8 <= n) {
+		uint64_t w;
+		memcpy(&w, in + q, 8);
+		if (w == (w & 0xff) * 0x0101010101010101ull) {
+			/* bytes [q, e) are one value: positions up to e - 3 hash alike */
+			size_t e = q + 8;
+			while (e + 8 <= n && e < to + 2) {
+				uint64_t x;
+				memcpy(&x, in + e, 8);
+				if (x != w)
+					break;
+				e += 8;
+			}
+			size_t stop = e - 2 < to ? e - 2 : to;
+			uint32_t h = (((uint32_t)w & 0xffffffu) * 2654435761u) >> (32 - HBITS);
+			prev[q & (WSIZE - 1)] = head[h];
+			link_each(prev, q + 1, stop);
+			head[h] = (uint32_t)stop;
+			q = stop;
+			continue;
+		}
+		for (int i = 0; i < 4; i++) {
+			uint32_t h = (((uint32_t)(w >> (8 * i)) & 0xffffffu) * 2654435761u) >> (32 - HBITS);
+			prev[(q + (size_t)i) & (WSIZE - 1)] = head[h];
+			head[h] = (uint32_t)(q + (size_t)i) + 1;
+		}
+		q += 4;
+	}
 #endif
+	for (; q < to; q++)
+		insert(z, q);
+}
 
 /* Longest match for pos among earlier positions (inserted already); 0 if < 3. */
 static int longest_match(const struct deflate *z, size_t pos, int prev_len, unsigned *dist)
@@ -608,8 +674,7 @@ static int deflate_raw(const uint8_t *in, size_t n, struct obuf *o, int last)
 			/* the match at pos-1 wins: emit it, insert what it covers */
 			add_sym(&z, (unsigned)prev_len, prev_dist);
 			size_t stop = pos - 1 + (size_t)prev_len;
-			for (size_t q = pos; q < stop; q++)
-				insert(&z, q);
+			insert_run(&z, pos, stop);
 			pos = stop;
 			has_prev = 0;
 		} else {
