@@ -46,6 +46,23 @@ static void test_checksums(void)
 	uint64_t a = (1 + 255ull * n) % 65521, b = (n + 255ull * n * (n + 1) / 2) % 65521;
 	CHECK(img_adler32(1, ff, n) == (uint32_t)(b << 16 | a));
 	CHECK(inf_adler32(ff, n) == (uint32_t)(b << 16 | a));
+	/* the 16-byte path against the test decoder's byte-at-a-time one:
+	 * every length to 100 at every alignment to 16, stretch ends near
+	 * 5552, and chained pieces starting anywhere */
+	uint32_t s = 12345;
+	for (size_t i = 0; i < n; i++) {
+		s = s * 1103515245u + 12345u;
+		ff[i] = (uint8_t)(s >> 23);
+	}
+	int same = 1;
+	for (size_t len = 0; len <= 100; len++)
+		for (size_t off = 0; off < 16; off++)
+			same &= img_adler32(1, ff + off, len) == inf_adler32(ff + off, len);
+	static const size_t lens[] = { 5551, 5552, 5553, 5552 + 16, 11104, 11105, 65536 + 7, 1000000 };
+	for (size_t i = 0; i < sizeof lens / sizeof lens[0]; i++)
+		same &= img_adler32(1, ff + 3, lens[i]) == inf_adler32(ff + 3, lens[i]);
+	same &= img_adler32(img_adler32(1, ff, 777), ff + 777, 70001) == inf_adler32(ff, 777 + 70001);
+	CHECK(same);
 	free(ff);
 }
 
