@@ -403,7 +403,16 @@ static void link_each(uint32_t *prev, size_t from, size_t to)
 	while (from < to) {
 		size_t off = from & (WSIZE - 1), m = WSIZE - off < to - from ? WSIZE - off : to - from;
 		uint32_t *d = prev + off, v = (uint32_t)from;
-		for (size_t i = 0; i < m; i++)
+		size_t i = 0;
+#if defined(__SSE2__)
+		__m128i x = _mm_add_epi32(_mm_set1_epi32((int)v), _mm_setr_epi32(0, 1, 2, 3));
+		const __m128i four = _mm_set1_epi32(4);
+		for (; i + 4 <= m; i += 4) {
+			_mm_storeu_si128((__m128i *)(void *)(d + i), x);
+			x = _mm_add_epi32(x, four);
+		}
+#endif
+		for (; i < m; i++)
 			d[i] = v + (uint32_t)i;
 		from += m;
 	}
@@ -784,65 +793,70 @@ static const uint8_t *png_row(struct png_rows *r, uint32_t y)
 	return o;
 }
 
-/* The five filters of one row into d[0..rb) (cur: the row, up: the one
- * above or NULL, k: bytes per pixel), each byte exactly as the PNG
- * specification defines it; one loop per filter, so each vectorises. */
-static void filter_none(const uint8_t *cur, const uint8_t *up, size_t rb, size_t k, uint8_t *d)
+/* The five filters of bytes [i0, i1) of one row into d[i0..i1) (cur: the
+ * row, up: the one above or NULL, k: bytes per pixel; i0 is 0 or at least
+ * k), each byte exactly as the PNG specification defines it; one loop per
+ * filter, so each vectorises. */
+static void filter_none(const uint8_t *cur, const uint8_t *up, size_t k, size_t i0, size_t i1, uint8_t *d)
 {
 	(void)up, (void)k;
-	memcpy(d, cur, rb);
+	memcpy(d + i0, cur + i0, i1 - i0);
 }
 
-static void filter_sub(const uint8_t *cur, const uint8_t *up, size_t rb, size_t k, uint8_t *d)
+static void filter_sub(const uint8_t *cur, const uint8_t *up, size_t k, size_t i0, size_t i1, uint8_t *d)
 {
 	(void)up;
-	for (size_t i = 0; i < k && i < rb; i++)
+	size_t i = i0;
+	for (; i < k && i < i1; i++)
 		d[i] = cur[i];
-	for (size_t i = k; i < rb; i++)
+	for (; i < i1; i++)
 		d[i] = (uint8_t)(cur[i] - cur[i - k]);
 }
 
-static void filter_up(const uint8_t *cur, const uint8_t *up, size_t rb, size_t k, uint8_t *d)
+static void filter_up(const uint8_t *cur, const uint8_t *up, size_t k, size_t i0, size_t i1, uint8_t *d)
 {
 	(void)k;
 	if (!up) {
-		memcpy(d, cur, rb);
+		memcpy(d + i0, cur + i0, i1 - i0);
 		return;
 	}
-	for (size_t i = 0; i < rb; i++)
+	for (size_t i = i0; i < i1; i++)
 		d[i] = (uint8_t)(cur[i] - up[i]);
 }
 
-static void filter_avg(const uint8_t *cur, const uint8_t *up, size_t rb, size_t k, uint8_t *d)
+static void filter_avg(const uint8_t *cur, const uint8_t *up, size_t k, size_t i0, size_t i1, uint8_t *d)
 {
+	size_t i = i0;
 	if (!up) {
-		for (size_t i = 0; i < k && i < rb; i++)
+		for (; i < k && i < i1; i++)
 			d[i] = cur[i];
-		for (size_t i = k; i < rb; i++)
+		for (; i < i1; i++)
 			d[i] = (uint8_t)(cur[i] - (cur[i - k] >> 1));
 		return;
 	}
-	for (size_t i = 0; i < k && i < rb; i++)
+	for (; i < k && i < i1; i++)
 		d[i] = (uint8_t)(cur[i] - (up[i] >> 1));
-	for (size_t i = k; i < rb; i++)
+	for (; i < i1; i++)
 		d[i] = (uint8_t)(cur[i] - ((cur[i - k] + up[i]) >> 1));
 }
 
-static void filter_paeth(const uint8_t *cur, const uint8_t *up, size_t rb, size_t k, uint8_t *d)
+static void filter_paeth(const uint8_t *cur, const uint8_t *up, size_t k, size_t i0, size_t i1, uint8_t *d)
 {
 	if (!up) { /* b = c = 0: the predictor is a, as Sub */
-		filter_sub(cur, up, rb, k, d);
+		filter_sub(cur, up, k, i0, i1, d);
 		return;
 	}
-	for (size_t i = 0; i < k && i < rb; i++) /* a = c = 0: the predictor is b */
+	size_t i = i0;
+	for (; i < k && i < i1; i++) /* a = c = 0: the predictor is b */
 		d[i] = (uint8_t)(cur[i] - up[i]);
-	size_t i = k;
 #if defined(__SSE2__)
 	/* 8 bytes at a time in 16-bit lanes: the same predictor (the inputs
 	 * a, b, c are raw bytes, so no lane depends on another); p - a = b - c,
-	 * p - b = a - c, p - c = (b - c) + (a - c), as paeth() */
+	 * p - b = a - c, p - c = (b - c) + (a - c), as paeth(). The predictor
+	 * is packed back to bytes and subtracted there (mod 256, as the
+	 * specification's byte arithmetic). */
 	const __m128i z = _mm_setzero_si128();
-	for (; i + 8 <= rb; i += 8) {
+	for (; i + 8 <= i1; i += 8) {
 		__m128i a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(const void *)(cur + i - k)), z);
 		__m128i b = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(const void *)(up + i)), z);
 		__m128i c = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(const void *)(up + i - k)), z);
@@ -851,18 +865,16 @@ static void filter_paeth(const uint8_t *cur, const uint8_t *up, size_t rb, size_
 		__m128i pa = _mm_max_epi16(bc, _mm_sub_epi16(z, bc));
 		__m128i pb = _mm_max_epi16(ac, _mm_sub_epi16(z, ac));
 		__m128i pc = _mm_max_epi16(s, _mm_sub_epi16(z, s));
-		/* a where pa <= pb and pa <= pc; else b where pb <= pc; else c */
-		__m128i use_a = _mm_andnot_si128(_mm_or_si128(_mm_cmpgt_epi16(pa, pb), _mm_cmpgt_epi16(pa, pc)),
-						 _mm_set1_epi16(-1));
-		__m128i use_b = _mm_andnot_si128(_mm_cmpgt_epi16(pb, pc), _mm_set1_epi16(-1));
-		__m128i bcsel = _mm_or_si128(_mm_and_si128(use_b, b), _mm_andnot_si128(use_b, c));
-		__m128i pred = _mm_or_si128(_mm_and_si128(use_a, a), _mm_andnot_si128(use_a, bcsel));
-		__m128i x = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(const void *)(cur + i)), z);
-		__m128i out = _mm_and_si128(_mm_sub_epi16(x, pred), _mm_set1_epi16(0xff));
-		_mm_storel_epi64((__m128i *)(void *)(d + i), _mm_packus_epi16(out, z));
+		/* not a where pa > pb or pa > pc; then c where pb > pc, else b */
+		__m128i not_a = _mm_or_si128(_mm_cmpgt_epi16(pa, pb), _mm_cmpgt_epi16(pa, pc));
+		__m128i use_c = _mm_cmpgt_epi16(pb, pc);
+		__m128i bcsel = _mm_or_si128(_mm_and_si128(use_c, c), _mm_andnot_si128(use_c, b));
+		__m128i pred = _mm_or_si128(_mm_and_si128(not_a, bcsel), _mm_andnot_si128(not_a, a));
+		__m128i x = _mm_loadl_epi64((const __m128i *)(const void *)(cur + i));
+		_mm_storel_epi64((__m128i *)(void *)(d + i), _mm_sub_epi8(x, _mm_packus_epi16(pred, z)));
 	}
 #endif
-	for (; i < rb; i++)
+	for (; i < i1; i++)
 		d[i] = (uint8_t)(cur[i] - paeth(cur[i - k], up[i], up[i - k]));
 }
 
@@ -898,29 +910,49 @@ static uint64_t filter_cost(const uint8_t *d, size_t n)
 	return sum;
 }
 
+/* Bytes of a row filtered and weighed as one step: a filter whose sum is
+ * already past the best one's stops there. */
+#define PNG_FILTER_STEP 512u
+
 /*
  * Filters rows [y0, y1) into out (row y at out + y * (1 + rb)), each row
- * with the filter of least sum of |signed byte|; bpp is the bytes of one
- * pixel (3 for 8-bit RGB, 6 for 16-bit). scratch holds 5 rows of rb bytes.
- * A row's choice and bytes depend on it and the row above only, so any
- * split of the rows gives the same bytes.
+ * with the filter of least sum of |signed byte|, the lowest-numbered of
+ * those that tie; bpp is the bytes of one pixel (3 for 8-bit RGB, 6 for
+ * 16-bit). scratch holds 5 rows of rb bytes. A row's choice and bytes
+ * depend on it and the row above only, so any split of the rows gives the
+ * same bytes.
+ *
+ * The same choice for less work: the filter that won the row before is
+ * tried first, then the others in order, each in steps of
+ * PNG_FILTER_STEP bytes; one stops as soon as its partial sum shows it
+ * cannot win (sums only grow): at a sum above the best's, or equal to it
+ * when it comes after the best in filter order.
  */
 static void png_filter(struct png_rows *r, uint32_t y0, uint32_t y1, int bpp, uint8_t *out, uint8_t *scratch)
 {
-	static void (*const filt[5])(const uint8_t *, const uint8_t *, size_t, size_t, uint8_t *) = {
+	static void (*const filt[5])(const uint8_t *, const uint8_t *, size_t, size_t, size_t, uint8_t *) = {
 		filter_none, filter_sub, filter_up, filter_avg, filter_paeth
 	};
 	size_t rb = r->rb, k = (size_t)bpp;
 	const uint8_t *up = y0 > 0 ? png_row(r, y0 - 1) : NULL;
+	int guess = 0;
 	for (uint32_t y = y0; y < y1; y++) {
 		const uint8_t *cur = png_row(r, y);
 		uint64_t best_sum = UINT64_MAX;
-		int best = 0;
-		for (int f = 0; f < 5; f++) {
+		int best = -1;
+		for (int t = 0; t < 5; t++) {
+			/* guess, then 0..4 without it */
+			int f = t == 0 ? guess : t - 1 < guess ? t - 1 : t;
 			uint8_t *d = scratch + (size_t)f * rb;
-			filt[f](cur, up, rb, k, d);
-			uint64_t sum = filter_cost(d, rb);
-			if (sum < best_sum) {
+			uint64_t sum = 0;
+			int lost = 0;
+			for (size_t i0 = 0; i0 < rb && !lost; i0 += PNG_FILTER_STEP) {
+				size_t i1 = rb - i0 < PNG_FILTER_STEP ? rb : i0 + PNG_FILTER_STEP;
+				filt[f](cur, up, k, i0, i1, d);
+				sum += filter_cost(d + i0, i1 - i0);
+				lost = best >= 0 && (sum > best_sum || (sum == best_sum && f > best));
+			}
+			if (!lost && (best < 0 || sum < best_sum || f < best)) {
 				best_sum = sum;
 				best = f;
 			}
@@ -928,6 +960,7 @@ static void png_filter(struct png_rows *r, uint32_t y0, uint32_t y1, int bpp, ui
 		uint8_t *o = out + (size_t)y * (rb + 1);
 		o[0] = (uint8_t)best;
 		memcpy(o + 1, scratch + (size_t)best * rb, rb);
+		guess = best;
 		up = cur;
 	}
 }
