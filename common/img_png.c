@@ -364,7 +364,8 @@ struct deflate {
 	const uint8_t *in;
 	size_t n;
 	uint32_t *head; /* HSIZE: most recent position + 1 with this hash (0: none) */
-	uint32_t *prev; /* WSIZE: previous position + 1 in the chain */
+	uint32_t *prev; /* WSIZE: previous position + 1 in the chain (an entry is
+			 * read only once its position is inserted: not cleared) */
 	uint16_t *sym_ll; /* literal (0-255) or length (3-258) */
 	uint16_t *sym_d;  /* 0 for a literal, else the distance */
 	int nsym;
@@ -469,7 +470,22 @@ static inline void insert_run(struct deflate *z, size_t from, size_t to)
 		insert(z, q);
 }
 
-/* Longest match for pos among earlier positions (inserted already); 0 if < 3. */
+#if IMG_WORD_COMPARE
+static inline uint16_t load16(const uint8_t *p)
+{
+	uint16_t v;
+	memcpy(&v, p, 2);
+	return v;
+}
+#endif
+
+/*
+ * Longest match for pos among earlier positions (inserted already); 0 if
+ * < 3. A candidate is compared in full only when the two bytes ending at
+ * the current best length and its first two bytes agree (each necessary
+ * for a longer match), then 8 bytes at a time: the same candidates win as
+ * with a byte-at-a-time comparison.
+ */
 static int longest_match(const struct deflate *z, size_t pos, int prev_len, unsigned *dist)
 {
 	size_t avail = z->n - pos;
@@ -485,25 +501,31 @@ static int longest_match(const struct deflate *z, size_t pos, int prev_len, unsi
 	uint32_t cand = z->head[hash3(s)];
 	while (cand && chain-- > 0) {
 		size_t c = cand - 1;
-		if (c >= pos || pos - c > WSIZE)
+		if (pos - c - 1 >= WSIZE) /* c >= pos (wraps round) or pos - c > WSIZE */
 			break;
 		const uint8_t *t = z->in + c;
-		if (t[best] == s[best] && t[0] == s[0] && t[1] == s[1]) {
-			int l = 2;
 #if IMG_WORD_COMPARE
+		if (load16(t + best - 1) == load16(s + best - 1) && load16(t) == load16(s)) {
+			int l = 2;
 			while (l + 8 <= maxlen) {
 				uint64_t a, b;
 				memcpy(&a, t + l, 8);
 				memcpy(&b, s + l, 8);
 				if (a != b) { /* the lowest differing byte ends the match */
 					l += __builtin_ctzll(a ^ b) >> 3;
-					break;
+					goto compared;
 				}
 				l += 8;
 			}
-#endif
 			while (l < maxlen && t[l] == s[l])
 				l++;
+		compared:
+#else
+		if (t[best] == s[best] && t[0] == s[0] && t[1] == s[1]) {
+			int l = 2;
+			while (l < maxlen && t[l] == s[l])
+				l++;
+#endif
 			if (l > best) {
 				best = l;
 				found = l;
@@ -697,7 +719,7 @@ static int deflate_raw(const uint8_t *in, size_t n, struct obuf *o, int last)
 	z.n = n;
 	z.o = o;
 	z.head = calloc(HSIZE, sizeof *z.head);
-	z.prev = calloc(WSIZE, sizeof *z.prev);
+	z.prev = malloc(WSIZE * sizeof *z.prev);
 	z.sym_ll = malloc(BLOCK_SYMS * sizeof *z.sym_ll);
 	z.sym_d = malloc(BLOCK_SYMS * sizeof *z.sym_d);
 	int rc = -1;
@@ -840,6 +862,28 @@ static void filter_avg(const uint8_t *cur, const uint8_t *up, size_t k, size_t i
 		d[i] = (uint8_t)(cur[i] - ((cur[i - k] + up[i]) >> 1));
 }
 
+#if defined(__SSE2__)
+/* Paeth's predictor for 8 pixels' bytes a, b, c in 16-bit lanes: the same
+ * predictor as paeth() (the inputs are raw bytes, so no lane depends on
+ * another); p - a = b - c, p - b = a - c, p - c = (b - c) + (a - c). The
+ * caller packs it back to bytes and subtracts there (mod 256, as the
+ * specification's byte arithmetic). */
+static inline __m128i paeth_pred8(__m128i a, __m128i b, __m128i c)
+{
+	const __m128i z = _mm_setzero_si128();
+	__m128i bc = _mm_sub_epi16(b, c), ac = _mm_sub_epi16(a, c);
+	__m128i s = _mm_add_epi16(bc, ac);
+	__m128i pa = _mm_max_epi16(bc, _mm_sub_epi16(z, bc));
+	__m128i pb = _mm_max_epi16(ac, _mm_sub_epi16(z, ac));
+	__m128i pc = _mm_max_epi16(s, _mm_sub_epi16(z, s));
+	/* not a where pa > pb or pa > pc; then c where pb > pc, else b */
+	__m128i not_a = _mm_or_si128(_mm_cmpgt_epi16(pa, pb), _mm_cmpgt_epi16(pa, pc));
+	__m128i use_c = _mm_cmpgt_epi16(pb, pc);
+	__m128i bcsel = _mm_or_si128(_mm_and_si128(use_c, c), _mm_andnot_si128(use_c, b));
+	return _mm_or_si128(_mm_and_si128(not_a, bcsel), _mm_andnot_si128(not_a, a));
+}
+#endif
+
 static void filter_paeth(const uint8_t *cur, const uint8_t *up, size_t k, size_t i0, size_t i1, uint8_t *d)
 {
 	if (!up) { /* b = c = 0: the predictor is a, as Sub */
@@ -850,28 +894,24 @@ static void filter_paeth(const uint8_t *cur, const uint8_t *up, size_t k, size_t
 	for (; i < k && i < i1; i++) /* a = c = 0: the predictor is b */
 		d[i] = (uint8_t)(cur[i] - up[i]);
 #if defined(__SSE2__)
-	/* 8 bytes at a time in 16-bit lanes: the same predictor (the inputs
-	 * a, b, c are raw bytes, so no lane depends on another); p - a = b - c,
-	 * p - b = a - c, p - c = (b - c) + (a - c), as paeth(). The predictor
-	 * is packed back to bytes and subtracted there (mod 256, as the
-	 * specification's byte arithmetic). */
-	const __m128i z = _mm_setzero_si128();
+	/* 16 bytes at a time, in two halves of 16-bit lanes (paeth_pred8) */
+	for (; i + 16 <= i1; i += 16) {
+		__m128i a = _mm_loadu_si128((const __m128i *)(const void *)(cur + i - k));
+		__m128i b = _mm_loadu_si128((const __m128i *)(const void *)(up + i));
+		__m128i c = _mm_loadu_si128((const __m128i *)(const void *)(up + i - k));
+		__m128i x = _mm_loadu_si128((const __m128i *)(const void *)(cur + i));
+		const __m128i z = _mm_setzero_si128();
+		__m128i lo = paeth_pred8(_mm_unpacklo_epi8(a, z), _mm_unpacklo_epi8(b, z), _mm_unpacklo_epi8(c, z));
+		__m128i hi = paeth_pred8(_mm_unpackhi_epi8(a, z), _mm_unpackhi_epi8(b, z), _mm_unpackhi_epi8(c, z));
+		_mm_storeu_si128((__m128i *)(void *)(d + i), _mm_sub_epi8(x, _mm_packus_epi16(lo, hi)));
+	}
 	for (; i + 8 <= i1; i += 8) {
+		const __m128i z = _mm_setzero_si128();
 		__m128i a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(const void *)(cur + i - k)), z);
 		__m128i b = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(const void *)(up + i)), z);
 		__m128i c = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(const void *)(up + i - k)), z);
-		__m128i bc = _mm_sub_epi16(b, c), ac = _mm_sub_epi16(a, c);
-		__m128i s = _mm_add_epi16(bc, ac);
-		__m128i pa = _mm_max_epi16(bc, _mm_sub_epi16(z, bc));
-		__m128i pb = _mm_max_epi16(ac, _mm_sub_epi16(z, ac));
-		__m128i pc = _mm_max_epi16(s, _mm_sub_epi16(z, s));
-		/* not a where pa > pb or pa > pc; then c where pb > pc, else b */
-		__m128i not_a = _mm_or_si128(_mm_cmpgt_epi16(pa, pb), _mm_cmpgt_epi16(pa, pc));
-		__m128i use_c = _mm_cmpgt_epi16(pb, pc);
-		__m128i bcsel = _mm_or_si128(_mm_and_si128(use_c, c), _mm_andnot_si128(use_c, b));
-		__m128i pred = _mm_or_si128(_mm_and_si128(not_a, bcsel), _mm_andnot_si128(not_a, a));
 		__m128i x = _mm_loadl_epi64((const __m128i *)(const void *)(cur + i));
-		_mm_storel_epi64((__m128i *)(void *)(d + i), _mm_sub_epi8(x, _mm_packus_epi16(pred, z)));
+		_mm_storel_epi64((__m128i *)(void *)(d + i), _mm_sub_epi8(x, _mm_packus_epi16(paeth_pred8(a, b, c), z)));
 	}
 #endif
 	for (; i < i1; i++)
