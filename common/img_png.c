@@ -499,11 +499,15 @@ static int longest_match(const struct deflate *z, size_t pos, int prev_len, unsi
 	if (best >= maxlen)
 		return 0;
 	const uint8_t *s = z->in + pos;
+	/* Every position in the chains is below pos (pos is inserted after
+	 * its search), so a chain ends at 0 or at the first position more than
+	 * WSIZE back: cand (position + 1) at most lim. Within the window no
+	 * link can have been overwritten (position c's slot is reused by
+	 * c + WSIZE, not inserted yet), so links only lead back. */
+	uint32_t lim = pos > WSIZE ? (uint32_t)(pos - WSIZE) : 0;
 	uint32_t cand = z->head[hash3(s)];
-	while (cand && chain-- > 0) {
+	while (cand > lim && chain-- > 0) {
 		size_t c = cand - 1;
-		if (pos - c - 1 >= WSIZE) /* c >= pos (wraps round) or pos - c > WSIZE */
-			break;
 		const uint8_t *t = z->in + c;
 #if IMG_WORD_COMPARE
 		if (load16(t + best - 1) == load16(s + best - 1) && load16(t) == load16(s)) {
@@ -535,10 +539,7 @@ static int longest_match(const struct deflate *z, size_t pos, int prev_len, unsi
 					break;
 			}
 		}
-		uint32_t nx = z->prev[c & (WSIZE - 1)];
-		if (nx >= cand) /* the window wrapped past this chain */
-			break;
-		cand = nx;
+		cand = z->prev[c & (WSIZE - 1)];
 	}
 	return found >= MIN_MATCH ? found : 0;
 }
