@@ -34,6 +34,12 @@ static inline unsigned img_quantise(float c, double top)
  */
 int img_png_emit(const struct img_desc *d, int plain, uint8_t **out, size_t *out_len);
 
+/* For tests: PNG filter f (0 None, 1 Sub, 2 Up, 3 Average, 4 Paeth) of
+ * bytes [i0, i1) of row cur (up: the row above, or NULL for the first; k
+ * bytes a pixel; i0 is 0 or at least k) into d[i0..i1), as the encoder
+ * filters. */
+void img_png_filter_bytes(int f, const uint8_t *cur, const uint8_t *up, size_t k, size_t i0, size_t i1, uint8_t *d);
+
 /*
  * Where encoded bytes go: memory (fd < 0: p grows to hold everything) or a
  * file descriptor (p is a buffer of IMG_SINK_BUF bytes, written out when

@@ -892,24 +892,30 @@ static void filter_avg(const uint8_t *cur, const uint8_t *up, size_t k, size_t i
 }
 
 #if defined(__SSE2__)
-/* Paeth's predictor for 8 pixels' bytes a, b, c in 16-bit lanes: the same
- * predictor as paeth() (the inputs are raw bytes, so no lane depends on
- * another); p - a = b - c, p - b = a - c, p - c = (b - c) + (a - c). The
- * caller packs it back to bytes and subtracts there (mod 256, as the
- * specification's byte arithmetic). */
-static inline __m128i paeth_pred8(__m128i a, __m128i b, __m128i c)
+/*
+ * Paeth's predictor for 16 bytes a, b, c (left, up, up-left), in 8-bit
+ * lanes. With p = a + b - c: pa = |p - a| = |b - c| and pb = |p - b| =
+ * |a - c|, each the OR of the two saturated differences (one is 0); pc =
+ * |p - c| = |(a - c) + (b - c)|, which is pa + pb when the two differences
+ * have one sign (or one is 0) and |pa - pb| when they have opposite signs.
+ * pa + pb saturates at 255, which changes no comparison (pa, pb <= 255).
+ * x <= y is x -sat y == 0. The same choice as paeth() for every one of the
+ * 2^24 triples (checked exhaustively when written).
+ */
+static inline __m128i paeth_pred16(__m128i a, __m128i b, __m128i c)
 {
 	const __m128i z = _mm_setzero_si128();
-	__m128i bc = _mm_sub_epi16(b, c), ac = _mm_sub_epi16(a, c);
-	__m128i s = _mm_add_epi16(bc, ac);
-	__m128i pa = _mm_max_epi16(bc, _mm_sub_epi16(z, bc));
-	__m128i pb = _mm_max_epi16(ac, _mm_sub_epi16(z, ac));
-	__m128i pc = _mm_max_epi16(s, _mm_sub_epi16(z, s));
-	/* not a where pa > pb or pa > pc; then c where pb > pc, else b */
-	__m128i not_a = _mm_or_si128(_mm_cmpgt_epi16(pa, pb), _mm_cmpgt_epi16(pa, pc));
-	__m128i use_c = _mm_cmpgt_epi16(pb, pc);
-	__m128i bcsel = _mm_or_si128(_mm_and_si128(use_c, c), _mm_andnot_si128(use_c, b));
-	return _mm_or_si128(_mm_and_si128(not_a, bcsel), _mm_andnot_si128(not_a, a));
+	__m128i bc = _mm_subs_epu8(b, c), cb = _mm_subs_epu8(c, b);
+	__m128i ac = _mm_subs_epu8(a, c), ca = _mm_subs_epu8(c, a);
+	__m128i pa = _mm_or_si128(bc, cb), pb = _mm_or_si128(ac, ca);
+	__m128i opposite = _mm_or_si128(_mm_min_epu8(bc, ca), _mm_min_epu8(cb, ac)); /* 0: one sign */
+	__m128i same = _mm_cmpeq_epi8(opposite, z);
+	__m128i sum = _mm_adds_epu8(pa, pb), diff = _mm_or_si128(_mm_subs_epu8(pa, pb), _mm_subs_epu8(pb, pa));
+	__m128i pc = _mm_or_si128(_mm_and_si128(same, sum), _mm_andnot_si128(same, diff));
+	__m128i use_a = _mm_cmpeq_epi8(_mm_or_si128(_mm_subs_epu8(pa, pb), _mm_subs_epu8(pa, pc)), z);
+	__m128i use_b = _mm_cmpeq_epi8(_mm_subs_epu8(pb, pc), z);
+	__m128i bcsel = _mm_or_si128(_mm_and_si128(use_b, b), _mm_andnot_si128(use_b, c));
+	return _mm_or_si128(_mm_and_si128(use_a, a), _mm_andnot_si128(use_a, bcsel));
 }
 #endif
 
@@ -923,28 +929,32 @@ static void filter_paeth(const uint8_t *cur, const uint8_t *up, size_t k, size_t
 	for (; i < k && i < i1; i++) /* a = c = 0: the predictor is b */
 		d[i] = (uint8_t)(cur[i] - up[i]);
 #if defined(__SSE2__)
-	/* 16 bytes at a time, in two halves of 16-bit lanes (paeth_pred8) */
+	/* 16 bytes a step (paeth_pred16), then 8 */
 	for (; i + 16 <= i1; i += 16) {
 		__m128i a = _mm_loadu_si128((const __m128i *)(const void *)(cur + i - k));
 		__m128i b = _mm_loadu_si128((const __m128i *)(const void *)(up + i));
 		__m128i c = _mm_loadu_si128((const __m128i *)(const void *)(up + i - k));
 		__m128i x = _mm_loadu_si128((const __m128i *)(const void *)(cur + i));
-		const __m128i z = _mm_setzero_si128();
-		__m128i lo = paeth_pred8(_mm_unpacklo_epi8(a, z), _mm_unpacklo_epi8(b, z), _mm_unpacklo_epi8(c, z));
-		__m128i hi = paeth_pred8(_mm_unpackhi_epi8(a, z), _mm_unpackhi_epi8(b, z), _mm_unpackhi_epi8(c, z));
-		_mm_storeu_si128((__m128i *)(void *)(d + i), _mm_sub_epi8(x, _mm_packus_epi16(lo, hi)));
+		_mm_storeu_si128((__m128i *)(void *)(d + i), _mm_sub_epi8(x, paeth_pred16(a, b, c)));
 	}
 	for (; i + 8 <= i1; i += 8) {
-		const __m128i z = _mm_setzero_si128();
-		__m128i a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(const void *)(cur + i - k)), z);
-		__m128i b = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(const void *)(up + i)), z);
-		__m128i c = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(const void *)(up + i - k)), z);
+		__m128i a = _mm_loadl_epi64((const __m128i *)(const void *)(cur + i - k));
+		__m128i b = _mm_loadl_epi64((const __m128i *)(const void *)(up + i));
+		__m128i c = _mm_loadl_epi64((const __m128i *)(const void *)(up + i - k));
 		__m128i x = _mm_loadl_epi64((const __m128i *)(const void *)(cur + i));
-		_mm_storel_epi64((__m128i *)(void *)(d + i), _mm_sub_epi8(x, _mm_packus_epi16(paeth_pred8(a, b, c), z)));
+		_mm_storel_epi64((__m128i *)(void *)(d + i), _mm_sub_epi8(x, paeth_pred16(a, b, c)));
 	}
 #endif
 	for (; i < i1; i++)
 		d[i] = (uint8_t)(cur[i] - paeth(cur[i - k], up[i], up[i - k]));
+}
+
+void img_png_filter_bytes(int f, const uint8_t *cur, const uint8_t *up, size_t k, size_t i0, size_t i1, uint8_t *d)
+{
+	static void (*const filt[5])(const uint8_t *, const uint8_t *, size_t, size_t, size_t, uint8_t *) = {
+		filter_none, filter_sub, filter_up, filter_avg, filter_paeth
+	};
+	filt[f](cur, up, k, i0, i1, d);
 }
 
 /* Sum of the bytes of d[0..n) read as signed, in absolute value (in
