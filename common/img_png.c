@@ -398,6 +398,7 @@ static inline void insert(struct deflate *z, size_t pos)
 }
 
 
+#if IMG_WORD_COMPARE
 /* prev[p] = p (the position before p, plus one) for p in [from, to): the
  * chain of a run of positions that all hash alike. */
 static void link_each(uint32_t *prev, size_t from, size_t to)
@@ -419,6 +420,7 @@ static void link_each(uint32_t *prev, size_t from, size_t to)
 		from += m;
 	}
 }
+#endif
 
 /*
  * insert() for every position in [from, to): what a match covers. The
