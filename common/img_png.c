@@ -35,8 +35,14 @@
 #include <string.h>
 #include <unistd.h>
 
-#if defined(__SSE2__)
+/* The SSE2 paths, and (IMG_WORD_COMPARE, below) the word-at-a-time ones:
+ * IMG_PORTABLE leaves both out (tests/cli/png_portable.sh builds the
+ * encoder so and checks it makes the same bytes). */
+#if defined(__SSE2__) && !defined(IMG_PORTABLE)
+#define IMG_SSE2 1
 #include <emmintrin.h>
+#else
+#define IMG_SSE2 0
 #endif
 
 #include "common/crc32.h"
@@ -103,7 +109,7 @@ uint32_t img_adler32(uint32_t adler, const uint8_t *p, size_t n)
 		/* 5552 bytes keep b below 2^32 before the reduction (zlib's NMAX) */
 		size_t k = n < 5552 ? n : 5552;
 		n -= k;
-#if defined(__SSE2__)
+#if IMG_SSE2
 		size_t nb = k / 16;
 		if (nb > 0) {
 			const __m128i z = _mm_setzero_si128();
@@ -376,7 +382,8 @@ struct deflate {
 
 /* Word-at-a-time loads (match comparison, hashing) where the byte order
  * makes them easy. */
-#if defined(__GNUC__) && defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#if defined(__GNUC__) && defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__ && \
+	!defined(IMG_PORTABLE)
 #define IMG_WORD_COMPARE 1
 #else
 #define IMG_WORD_COMPARE 0
@@ -407,7 +414,7 @@ static void link_each(uint32_t *prev, size_t from, size_t to)
 		size_t off = from & (WSIZE - 1), m = WSIZE - off < to - from ? WSIZE - off : to - from;
 		uint32_t *d = prev + off, v = (uint32_t)from;
 		size_t i = 0;
-#if defined(__SSE2__)
+#if IMG_SSE2
 		__m128i x = _mm_add_epi32(_mm_set1_epi32((int)v), _mm_setr_epi32(0, 1, 2, 3));
 		const __m128i four = _mm_set1_epi32(4);
 		for (; i + 4 <= m; i += 4) {
@@ -893,7 +900,7 @@ static void filter_avg(const uint8_t *cur, const uint8_t *up, size_t k, size_t i
 		d[i] = (uint8_t)(cur[i] - ((cur[i - k] + up[i]) >> 1));
 }
 
-#if defined(__SSE2__)
+#if IMG_SSE2
 /*
  * Paeth's predictor for 16 bytes a, b, c (left, up, up-left), in 8-bit
  * lanes. With p = a + b - c: pa = |p - a| = |b - c| and pb = |p - b| =
@@ -930,7 +937,7 @@ static void filter_paeth(const uint8_t *cur, const uint8_t *up, size_t k, size_t
 	size_t i = i0;
 	for (; i < k && i < i1; i++) /* a = c = 0: the predictor is b */
 		d[i] = (uint8_t)(cur[i] - up[i]);
-#if defined(__SSE2__)
+#if IMG_SSE2
 	/* 16 bytes a step (paeth_pred16), then 8 */
 	for (; i + 16 <= i1; i += 16) {
 		__m128i a = _mm_loadu_si128((const __m128i *)(const void *)(cur + i - k));
@@ -964,7 +971,7 @@ void img_png_filter_bytes(int f, const uint8_t *cur, const uint8_t *up, size_t k
 static uint64_t filter_cost(const uint8_t *d, size_t n)
 {
 	uint64_t sum = 0;
-#if defined(__SSE2__)
+#if IMG_SSE2
 	/* |v| of a signed byte v is min(v, -v) read unsigned (-128: 128 both
 	 * ways); psadbw sums 8 of them into each 64-bit half */
 	__m128i acc = _mm_setzero_si128(), z = _mm_setzero_si128();
