@@ -247,8 +247,13 @@ static void ob_append_bits(struct obuf *o, const struct obuf *src)
 		ob_flush_bits(o);
 		ob_bytes(o, src->p, src->n);
 	} else {
-		for (size_t i = 0; i < src->n; i++)
-			ob_put(o, src->p[i], 8);
+		const uint8_t *p = src->p;
+		size_t i = 0;
+		for (; i + 4 <= src->n; i += 4) /* the same bits, 32 at a time */
+			ob_put(o, (uint32_t)p[i] | (uint32_t)p[i + 1] << 8 | (uint32_t)p[i + 2] << 16 |
+					  (uint32_t)p[i + 3] << 24, 32);
+		for (; i < src->n; i++)
+			ob_put(o, p[i], 8);
 	}
 	if (src->nbits)
 		ob_put(o, (uint32_t)src->bits, src->nbits);
@@ -276,17 +281,26 @@ static void huff_lengths(const uint32_t *freq_in, int n, int limit, uint8_t *len
 		}
 	}
 	for (;;) {
-		/* leaves sorted by frequency (insertion sort: n <= 288) */
-		int sym[288], m = 0;
-		for (int i = 0; i < n; i++) {
-			if (!freq[i])
-				continue;
-			int j = m++;
-			while (j > 0 && freq[sym[j - 1]] > freq[i]) {
-				sym[j] = sym[j - 1];
-				j--;
+		/* leaves sorted by frequency, ties by symbol: a stable merge sort
+		 * of the symbols in order (the same order as an insertion sort) */
+		int buf[2][288], m = 0, *sym = buf[0], *other = buf[1];
+		for (int i = 0; i < n; i++)
+			if (freq[i])
+				sym[m++] = i;
+		for (int width = 1; width < m; width *= 2) {
+			for (int lo = 0; lo < m; lo += 2 * width) {
+				int mid = lo + width < m ? lo + width : m, hi = lo + 2 * width < m ? lo + 2 * width : m;
+				int a = lo, b = mid, o = lo;
+				while (a < mid && b < hi)
+					other[o++] = freq[sym[a]] <= freq[sym[b]] ? sym[a++] : sym[b++];
+				while (a < mid)
+					other[o++] = sym[a++];
+				while (b < hi)
+					other[o++] = sym[b++];
 			}
-			sym[j] = i;
+			int *swap = sym;
+			sym = other;
+			other = swap;
 		}
 		/* two-queue Huffman: nodes 0..m-1 leaves, m.. internal */
 		uint64_t w[2 * 288];
@@ -395,11 +409,25 @@ static inline uint32_t hash3(const uint8_t *p)
 	return (v * 2654435761u) >> (32 - HBITS);
 }
 
+/* hash3 of the bytes at pos (pos + 3 <= n): where 4 bytes can be read, one
+ * little-endian load less its top byte. */
+static inline uint32_t hash_at(const struct deflate *z, size_t pos)
+{
+#if IMG_WORD_COMPARE
+	if (pos + 4 <= z->n) {
+		uint32_t v;
+		memcpy(&v, z->in + pos, 4);
+		return ((v & 0xffffffu) * 2654435761u) >> (32 - HBITS);
+	}
+#endif
+	return hash3(z->in + pos);
+}
+
 static inline void insert(struct deflate *z, size_t pos)
 {
 	if (pos + MIN_MATCH > z->n)
 		return;
-	uint32_t h = hash3(z->in + pos);
+	uint32_t h = hash_at(z, pos);
 	z->prev[pos & (WSIZE - 1)] = z->head[h];
 	z->head[h] = (uint32_t)pos + 1;
 }
@@ -514,7 +542,7 @@ static int longest_match(const struct deflate *z, size_t pos, int prev_len, unsi
 	 * link can have been overwritten (position c's slot is reused by
 	 * c + WSIZE, not inserted yet), so links only lead back. */
 	uint32_t lim = pos > WSIZE ? (uint32_t)(pos - WSIZE) : 0;
-	uint32_t cand = z->head[hash3(s)];
+	uint32_t cand = z->head[hash_at(z, pos)];
 	while (cand > lim && chain-- > 0) {
 		size_t c = cand - 1;
 		const uint8_t *t = z->in + c;
