@@ -33,6 +33,23 @@ static void test_checksums(void)
 	CHECK(crc32_update(0, d, 0) == 0);
 	CHECK(crc32_update(0, (const uint8_t *)"The quick brown fox jumps over the lazy dog", 43) == 0x414FA339u);
 	CHECK(inf_crc32(d, 9, 0) == 0xCBF43926u); /* the test decoder's own CRC */
+	/* eight bytes a step against the decoder's byte-at-a-time CRC: every
+	 * length to 40 at every alignment to 8, a long run, chained pieces */
+	{
+		uint8_t buf[70000];
+		uint32_t s = 99;
+		for (size_t i = 0; i < sizeof buf; i++) {
+			s = s * 1103515245u + 12345u;
+			buf[i] = (uint8_t)(s >> 24);
+		}
+		int same = 1;
+		for (size_t len = 0; len <= 40; len++)
+			for (size_t off = 0; off < 8; off++)
+				same &= crc32_update(0, buf + off, len) == inf_crc32(buf + off, len, 0);
+		same &= crc32_update(0, buf + 1, 69999) == inf_crc32(buf + 1, 69999, 0);
+		same &= crc32_update(crc32_update(0, buf, 13), buf + 13, 5000) == inf_crc32(buf, 5013, 0);
+		CHECK(same);
+	}
 
 	CHECK(img_adler32(1, (const uint8_t *)"Wikipedia", 9) == 0x11E60398u);
 	CHECK(img_adler32(1, (const uint8_t *)"abc", 3) == 0x024D0127u);
