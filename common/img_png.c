@@ -592,27 +592,59 @@ static uint64_t block_cost(const uint32_t *lf, const uint8_t *ll, const uint32_t
 	return bits;
 }
 
-/* Writes the symbols of one block with the given codes. */
+/* A bit writer into room reserved beforehand: ob_put's bits and bytes
+ * without its checks, its state in locals (registers). */
+struct bitw {
+	uint64_t bits;
+	int nbits;
+	uint8_t *d;
+};
+
+static inline void bw_put(struct bitw *w, uint32_t v, int n)
+{
+	w->bits |= (uint64_t)v << w->nbits;
+	w->nbits += n;
+	if (w->nbits >= 32) {
+		w->d[0] = (uint8_t)w->bits;
+		w->d[1] = (uint8_t)(w->bits >> 8);
+		w->d[2] = (uint8_t)(w->bits >> 16);
+		w->d[3] = (uint8_t)(w->bits >> 24);
+		w->d += 4;
+		w->bits >>= 32;
+		w->nbits -= 32;
+	}
+}
+
+/* Writes the symbols of one block with the given codes: at most 48 bits a
+ * symbol (length code 15 + 5 extra, distance code 15 + 13 extra) and the
+ * end code, so 6 bytes a symbol and 16 more are reserved first. */
 static void write_symbols(struct deflate *z, const uint16_t *lc, const uint8_t *ll, const uint16_t *dc,
 			  const uint8_t *dl)
 {
 	struct obuf *o = z->o;
+	ob_reserve(o, (size_t)z->nsym * 6 + 16);
+	if (o->oom)
+		return;
+	struct bitw w = { o->bits, o->nbits, o->p + o->n };
 	for (int i = 0; i < z->nsym; i++) {
 		unsigned v = z->sym_ll[i], d = z->sym_d[i];
 		if (!d) {
-			ob_put(o, lc[v], ll[v]);
+			bw_put(&w, lc[v], ll[v]);
 			continue;
 		}
 		int c = len_code[v];
-		ob_put(o, lc[257 + c], ll[257 + c]);
+		bw_put(&w, lc[257 + c], ll[257 + c]);
 		if (len_extra[c])
-			ob_put(o, v - len_base[c], len_extra[c]);
+			bw_put(&w, v - len_base[c], len_extra[c]);
 		int dcode = img_dist_code(d);
-		ob_put(o, dc[dcode], dl[dcode]);
+		bw_put(&w, dc[dcode], dl[dcode]);
 		if (dist_extra[dcode])
-			ob_put(o, d - dist_base[dcode], dist_extra[dcode]);
+			bw_put(&w, d - dist_base[dcode], dist_extra[dcode]);
 	}
-	ob_put(o, lc[256], ll[256]);
+	bw_put(&w, lc[256], ll[256]);
+	o->n = (size_t)(w.d - o->p);
+	o->bits = w.bits;
+	o->nbits = w.nbits;
 }
 
 /*
