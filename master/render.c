@@ -373,7 +373,9 @@ int master_render(const struct master_opts *o)
 
 	enum render_pixel px = pixel_for(fmt);
 	const uint32_t bpp = (uint32_t)render_pixel_bytes(px);
-	if (image_alloc(&image_mem, (size_t)w * h * bpp) == 0) /* unfinished pixels stay black (0 or 0.0f) */
+	/* unfinished pixels stay black (0 or 0.0f); w * h * bpp overflows no size_t
+	 * of 64 bits (LIM_IMAGE_PIXELS), but may one of 32 */
+	if ((size_t)w * h <= SIZE_MAX / bpp && image_alloc(&image_mem, (size_t)w * h * bpp) == 0)
 		image = image_mem.p;
 	if (!image) {
 		fprintf(stderr, "portray-master: out of memory for a %ux%u image\n", w, h);
