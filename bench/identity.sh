@@ -11,7 +11,9 @@
 # examples/*.sce, the four SPD scenes at 640x480 plain, with super-sample
 # 2x2 and with adaptive filtering, and the teapot and dragon meshes when
 # $PORTRAY_SHARED (default ../shared/data) has them. ID_SIZE (default
-# 640x480) sets the size of the SPD and mesh renders. Prints one line per
+# 640x480) sets the size of the SPD and mesh renders. ID_EXT=png compares
+# PNG files instead of PPM, so the encoder's bytes too (with
+# --no-render-time, the default, said outright). Prints one line per
 # difference and a summary; exits 1 when anything differs. Nothing here is
 # a test (the reference binary is not part of the tree).
 REF=${REF:?set REF to the reference portray-master}
@@ -19,6 +21,9 @@ MASTER=${MASTER:-bin/portray-master}
 SHARED=${PORTRAY_SHARED:-../shared/data}
 SIZE=${ID_SIZE:-640x480}
 J=${ID_THREADS:-2}
+EXT=${ID_EXT:-ppm}
+NRT=
+[ "$EXT" = png ] && NRT=--no-render-time
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/portray-id.XXXXXX")
 trap 'rm -rf "$TMP"' EXIT
 n=0
@@ -30,18 +35,18 @@ one() {
 	scene=$2
 	shift 2
 	n=$((n + 1))
-	"$MASTER" -q -j "$J" "$@" -o "$TMP/new.ppm" "$scene" 2>/dev/null
+	"$MASTER" -q -j "$J" $NRT "$@" -o "$TMP/new.$EXT" "$scene" 2>/dev/null
 	a=$?
-	"$REF" -q -j "$J" "$@" -o "$TMP/ref.ppm" "$scene" 2>/dev/null
+	"$REF" -q -j "$J" $NRT "$@" -o "$TMP/ref.$EXT" "$scene" 2>/dev/null
 	b=$?
 	if [ "$a" != "$b" ]; then
 		echo "DIFF $name: exit $a, reference $b"
 		bad=$((bad + 1))
-	elif [ -f "$TMP/ref.ppm" ] && ! cmp -s "$TMP/new.ppm" "$TMP/ref.ppm"; then
+	elif [ -f "$TMP/ref.$EXT" ] && ! cmp -s "$TMP/new.$EXT" "$TMP/ref.$EXT"; then
 		echo "DIFF $name: pixels differ"
 		bad=$((bad + 1))
 	fi
-	rm -f "$TMP/new.ppm" "$TMP/ref.ppm"
+	rm -f "$TMP/new.$EXT" "$TMP/ref.$EXT"
 }
 
 # variant SCENE FILTER: SCENE with its camera's filter replaced by FILTER

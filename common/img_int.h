@@ -1,6 +1,7 @@
 /*
- * img_int.h - what common/img.c (PNG, PPM, files) and common/img_float.c
- * (PFM, OpenEXR, half, sRGB) share; not for use outside the img_ module.
+ * img_int.h - what common/img.c (PPM, formats, files), common/img_png.c
+ * (PNG, deflate) and common/img_float.c (PFM, OpenEXR, half, sRGB) share;
+ * not for use outside the img_ module.
  */
 #ifndef PORTRAY_IMG_INT_H
 #define PORTRAY_IMG_INT_H
@@ -9,6 +10,35 @@
 #include <stdint.h>
 
 #include "common/img.h"
+#include "common/limits.h"
+
+/* w x h within LIM_IMAGE_SIDE and LIM_IMAGE_PIXELS (and not empty). */
+static inline int img_size_ok(uint32_t w, uint32_t h)
+{
+	return w > 0 && h > 0 && w <= LIM_IMAGE_SIDE && h <= LIM_IMAGE_SIDE &&
+	       (uint64_t)w * h <= LIM_IMAGE_PIXELS;
+}
+
+/* The renderer's own rounding (filter_quantise): clamp to [0,1], then the
+ * nearest of 2^bits - 1 steps (top = 255 or 65535); NaN counts as 0. */
+static inline unsigned img_quantise(float c, double top)
+{
+	double v = c > 0 ? (c < 1 ? c : 1) : 0;
+	return (unsigned)(v * top + 0.5);
+}
+
+/*
+ * Encodes d (validated; format IMG_PNG or IMG_PNG16) as a PNG in memory
+ * (img_png.c). plain: no chunk but IHDR, IDAT and IEND (img_png_encode's
+ * PNG). 0 with *out malloc'd (the caller frees it), or -1 with errno ENOMEM.
+ */
+int img_png_emit(const struct img_desc *d, int plain, uint8_t **out, size_t *out_len);
+
+/* For tests: PNG filter f (0 None, 1 Sub, 2 Up, 3 Average, 4 Paeth) of
+ * bytes [i0, i1) of row cur (up: the row above, or NULL for the first; k
+ * bytes a pixel; i0 is 0 or at least k) into d[i0..i1), as the encoder
+ * filters. */
+void img_png_filter_bytes(int f, const uint8_t *cur, const uint8_t *up, size_t k, size_t i0, size_t i1, uint8_t *d);
 
 /*
  * Where encoded bytes go: memory (fd < 0: p grows to hold everything) or a

@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -128,6 +129,53 @@ static int output_plan(const struct master_opts *o, const char **out, char **out
 }
 
 /*
+ * The assembled image's memory, zeroed (unfinished pixels stay black). Its
+ * first touch is the assembly of the tiles, and in 4 KiB pages that is a
+ * page fault every 4 KiB (900 for a 1280x960 RGB8 image, about a millisecond
+ * of the CPU). Where the system offers transparent huge pages on request
+ * (Linux MADV_HUGEPAGE), an image of at least IMAGE_HUGE_MIN bytes gets a
+ * mapping of its own, aligned to IMAGE_HUGE_PAGE and so advised; elsewhere,
+ * or when the mapping fails, calloc's. image_free takes either.
+ */
+#define IMAGE_HUGE_PAGE ((size_t)2 << 20) /* x86-64's and aarch64's huge page */
+#define IMAGE_HUGE_MIN ((size_t)1 << 20)  /* below this the faults cost little */
+struct image_mem {
+	uint8_t *p;
+	void *map; /* the mapping (map_len bytes), or NULL: p is calloc's */
+	size_t map_len;
+};
+
+static int image_alloc(struct image_mem *m, size_t n)
+{
+	memset(m, 0, sizeof *m);
+#if defined(MADV_HUGEPAGE) && defined(MAP_ANONYMOUS)
+	if (n >= IMAGE_HUGE_MIN && n <= SIZE_MAX - 2 * IMAGE_HUGE_PAGE) {
+		size_t len = (n + IMAGE_HUGE_PAGE - 1) / IMAGE_HUGE_PAGE * IMAGE_HUGE_PAGE + IMAGE_HUGE_PAGE;
+		void *map = mmap(NULL, len, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+		if (map != MAP_FAILED) {
+			uintptr_t a = ((uintptr_t)map + IMAGE_HUGE_PAGE - 1) & ~(uintptr_t)(IMAGE_HUGE_PAGE - 1);
+			m->p = (uint8_t *)map + (a - (uintptr_t)map); /* fresh anonymous memory reads as zeros */
+			m->map = map;
+			m->map_len = len;
+			(void)madvise(m->p, len - (a - (uintptr_t)map), MADV_HUGEPAGE); /* advice only */
+			return 0;
+		}
+	}
+#endif
+	m->p = calloc(n ? n : 1, 1);
+	return m->p ? 0 : -1;
+}
+
+static void image_free(struct image_mem *m)
+{
+	if (m->map)
+		munmap(m->map, m->map_len);
+	else
+		free(m->p);
+	memset(m, 0, sizeof *m);
+}
+
+/*
  * The text items of the image (PNG tEXt chunks, OpenEXR string attributes):
  * Software, Source (the scene's and camera's file names, without their
  * directories), Render time (unless --no-render-time) and, for a partial
@@ -234,6 +282,7 @@ int master_render(const struct master_opts *o)
 	uint8_t *enc = NULL;
 	size_t enc_len = 0;
 	uint8_t *image = NULL;
+	struct image_mem image_mem = { 0 };
 	char *out_alloc = NULL;
 	struct scene_error err;
 	memset(&err, 0, sizeof err);
@@ -324,7 +373,10 @@ int master_render(const struct master_opts *o)
 
 	enum render_pixel px = pixel_for(fmt);
 	const uint32_t bpp = (uint32_t)render_pixel_bytes(px);
-	image = calloc((size_t)w * h, bpp); /* unfinished pixels stay black (0 or 0.0f) */
+	/* unfinished pixels stay black (0 or 0.0f); w * h * bpp overflows no size_t
+	 * of 64 bits (LIM_IMAGE_PIXELS), but may one of 32 */
+	if ((size_t)w * h <= SIZE_MAX / bpp && image_alloc(&image_mem, (size_t)w * h * bpp) == 0)
+		image = image_mem.p;
 	if (!image) {
 		fprintf(stderr, "portray-master: out of memory for a %ux%u image\n", w, h);
 		rc = ERRLEVEL_FATAL;
@@ -432,7 +484,7 @@ done:
 		say_journal(out);
 	if (watching)
 		interrupt_stop();
-	free(image);
+	image_free(&image_mem);
 	free(out_copy);
 	free(out_alloc);
 	renderer_free(r);

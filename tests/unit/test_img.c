@@ -33,6 +33,23 @@ static void test_checksums(void)
 	CHECK(crc32_update(0, d, 0) == 0);
 	CHECK(crc32_update(0, (const uint8_t *)"The quick brown fox jumps over the lazy dog", 43) == 0x414FA339u);
 	CHECK(inf_crc32(d, 9, 0) == 0xCBF43926u); /* the test decoder's own CRC */
+	/* eight bytes a step against the decoder's byte-at-a-time CRC: every
+	 * length to 40 at every alignment to 8, a long run, chained pieces */
+	{
+		uint8_t buf[70000];
+		uint32_t s = 99;
+		for (size_t i = 0; i < sizeof buf; i++) {
+			s = s * 1103515245u + 12345u;
+			buf[i] = (uint8_t)(s >> 24);
+		}
+		int same = 1;
+		for (size_t len = 0; len <= 40; len++)
+			for (size_t off = 0; off < 8; off++)
+				same &= crc32_update(0, buf + off, len) == inf_crc32(buf + off, len, 0);
+		same &= crc32_update(0, buf + 1, 69999) == inf_crc32(buf + 1, 69999, 0);
+		same &= crc32_update(crc32_update(0, buf, 13), buf + 13, 5000) == inf_crc32(buf, 5013, 0);
+		CHECK(same);
+	}
 
 	CHECK(img_adler32(1, (const uint8_t *)"Wikipedia", 9) == 0x11E60398u);
 	CHECK(img_adler32(1, (const uint8_t *)"abc", 3) == 0x024D0127u);
@@ -46,6 +63,23 @@ static void test_checksums(void)
 	uint64_t a = (1 + 255ull * n) % 65521, b = (n + 255ull * n * (n + 1) / 2) % 65521;
 	CHECK(img_adler32(1, ff, n) == (uint32_t)(b << 16 | a));
 	CHECK(inf_adler32(ff, n) == (uint32_t)(b << 16 | a));
+	/* the 16-byte path against the test decoder's byte-at-a-time one:
+	 * every length to 100 at every alignment to 16, stretch ends near
+	 * 5552, and chained pieces starting anywhere */
+	uint32_t s = 12345;
+	for (size_t i = 0; i < n; i++) {
+		s = s * 1103515245u + 12345u;
+		ff[i] = (uint8_t)(s >> 23);
+	}
+	int same = 1;
+	for (size_t len = 0; len <= 100; len++)
+		for (size_t off = 0; off < 16; off++)
+			same &= img_adler32(1, ff + off, len) == inf_adler32(ff + off, len);
+	static const size_t lens[] = { 5551, 5552, 5553, 5552 + 16, 11104, 11105, 65536 + 7, 1000000 };
+	for (size_t i = 0; i < sizeof lens / sizeof lens[0]; i++)
+		same &= img_adler32(1, ff + 3, lens[i]) == inf_adler32(ff + 3, lens[i]);
+	same &= img_adler32(img_adler32(1, ff, 777), ff + 777, 70001) == inf_adler32(ff, 777 + 70001);
+	CHECK(same);
 	free(ff);
 }
 
