@@ -536,10 +536,13 @@ static int highlight_needed(double rv, double power, double kd, vec3 in, vec3 kc
  * and light samples. weight is what the ray contributes to its pixel: a
  * sample whose whole contribution would be below SHADE_MIN_WEIGHT / (all
  * samples of all lights) is skipped without its shadow ray, so the error
- * this makes in a pixel is below SHADE_MIN_WEIGHT.
+ * this makes in a pixel is below SHADE_MIN_WEIGHT. Inlined into its one
+ * caller, surf_shade: left to itself gcc stopped inlining it once BLOCK
+ * SHADING was added, which cost balls_s4 0.85% (docs/performance.md).
  */
-static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, const struct shader_mat *m,
-		   double kd, double weight, uint64_t seed, const struct shadow_pre *pre)
+static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng,
+							  vec3 v, const struct shader_mat *m, double kd,
+							  double weight, uint64_t seed, const struct shadow_pre *pre)
 {
 	bool shadows = !c->s->image.no_shadows;
 	bool want_spec = m->specular != 0;
