@@ -536,10 +536,13 @@ static int highlight_needed(double rv, double power, double kd, vec3 in, vec3 kc
  * and light samples. weight is what the ray contributes to its pixel: a
  * sample whose whole contribution would be below SHADE_MIN_WEIGHT / (all
  * samples of all lights) is skipped without its shadow ray, so the error
- * this makes in a pixel is below SHADE_MIN_WEIGHT.
+ * this makes in a pixel is below SHADE_MIN_WEIGHT. Inlined into its one
+ * caller, surf_shade: left to itself gcc stopped inlining it once BLOCK
+ * SHADING was added, which cost balls_s4 0.85% (docs/performance.md).
  */
-static vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng, vec3 v, const struct shader_mat *m,
-		   double kd, double weight, uint64_t seed, const struct shadow_pre *pre)
+static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng,
+							  vec3 v, const struct shader_mat *m, double kd,
+							  double weight, uint64_t seed, const struct shadow_pre *pre)
 {
 	bool shadows = !c->s->image.no_shadows;
 	bool want_spec = m->specular != 0;
@@ -614,13 +617,6 @@ static vec3 trace(const struct shade_ctx *c, const struct ray *r, int depth, dou
 static vec3 trace_hit(const struct shade_ctx *c, const struct ray *r, const struct hit *hp, int depth,
 		      double weight, uint64_t seed);
 
-/* trace() of a secondary ray from o along unit d. */
-static vec3 trace_from(const struct shade_ctx *c, vec3 o, vec3 d, int depth, double weight, uint64_t seed)
-{
-	struct ray r = { o, d, 0, INFINITY };
-	return trace(c, &r, depth, weight, seed);
-}
-
 /*
  * The colour seen along ray r (unit direction). weight is the largest
  * channel of what this ray contributes to the pixel; depth counts bounces.
@@ -678,61 +674,79 @@ static vec3 trace_hit(const struct shade_ctx *c, const struct ray *r, const stru
 	return surf_shade(c, r, &sf, depth, weight, seed, NULL);
 }
 
+/*
+ * The mirror ray of prepared hit sf of ray r (weight: what r contributes to
+ * its pixel), as surf_shade traces it: false when it traces none; else
+ * *out is the ray, *w its weight and *k what its colour is multiplied by.
+ */
+static inline bool reflect_ray(const struct shade_ctx *c, const struct ray *r, const struct surf *sf,
+			       double weight, struct ray *out, double *w, vec3 *k)
+{
+	const struct shader_mat *m = &sf->m;
+	if (c->s->image.no_reflections || !(m->reflection > 0))
+		return false;
+	*k = v3_scale(m->spec_colour, m->reflection);
+	*w = weight * maxc(*k);
+	if (!(*w >= SHADE_MIN_WEIGHT))
+		return false;
+	vec3 d = r->d, n = sf->n, ng = sf->ng;
+	vec3 rd = reflect(d, n);
+	if (v3_dot(rd, ng) <= 0) /* a perturbed normal sent it into the surface */
+		rd = reflect(d, ng);
+	*out = (struct ray){ offset(sf->h.p, ng, rd), rd, 0, INFINITY };
+	return true;
+}
+
+/* The same for the transmitted ray: refraction, or total internal
+ * reflection (traced only with reflections on). */
+static inline bool refract_ray(const struct shade_ctx *c, const struct ray *r, const struct surf *sf,
+			       double weight, struct ray *out, double *w, vec3 *k)
+{
+	const struct shader_mat *m = &sf->m;
+	double td = sf->td;
+	if (!(td > 0))
+		return false;
+	*k = v3_scale(v3_max(m->tran_colour, v3(0, 0, 0)), td);
+	*w = weight * maxc(*k);
+	if (!(*w >= SHADE_MIN_WEIGHT))
+		return false;
+	vec3 d = r->d, n = sf->n, ng = sf->ng;
+	double eta = sf->entering ? 1 / m->ior : m->ior;
+	double cosi = -v3_dot(n, d);
+	double k2 = 1 - eta * eta * (1 - cosi * cosi);
+	vec3 nd;
+	bool tir = k2 < 0;
+	if (tir) {
+		nd = reflect(d, n);
+	} else {
+		nd = v3_norm(v3_add(v3_scale(d, eta), v3_scale(n, eta * cosi - sqrt(k2))));
+		if (v3_dot(nd, ng) >= 0) /* perturbed normal: keep it going through */
+			nd = d;
+	}
+	if (tir && c->s->image.no_reflections)
+		return false;
+	*out = (struct ray){ offset(sf->h.p, ng, nd), nd, 0, INFINITY };
+	return true;
+}
+
 /* The second half of trace_hit, with the shadow answers of pre (NULL: none
- * known) for the hit's own direct lighting. */
+ * known) for the hit's own direct lighting: direct + reflection +
+ * refraction, summed in that order (block_shade sums the same terms in the
+ * same order). */
 static vec3 surf_shade(const struct shade_ctx *c, const struct ray *r, const struct surf *sf, int depth,
 		       double weight, uint64_t seed, const struct shadow_pre *pre)
 {
-	const struct hit *h = &sf->h;
 	const struct shader_mat *m = &sf->m;
-	vec3 d = r->d;
-	bool entering = sf->entering;
-	vec3 ng = sf->ng, n = sf->n;
-	vec3 v = v3_neg(d);
-	double td = sf->td;
-
-	vec3 col = direct(c, h->p, n, ng, v, m, m->diffuse * (1 - td), weight, seed, pre);
-
+	vec3 col = direct(c, sf->h.p, sf->n, sf->ng, v3_neg(r->d), m, m->diffuse * (1 - sf->td), weight, seed, pre);
 	if (depth >= LIM_TRACE_DEPTH)
 		return col;
-	bool reflections = !c->s->image.no_reflections;
-
-	/* mirror reflection */
-	if (reflections && m->reflection > 0) {
-		vec3 k = v3_scale(m->spec_colour, m->reflection);
-		double w = weight * maxc(k);
-		if (w >= SHADE_MIN_WEIGHT) {
-			vec3 rd = reflect(d, n);
-			if (v3_dot(rd, ng) <= 0) /* a perturbed normal sent it into the surface */
-				rd = reflect(d, ng);
-			vec3 rc = trace_from(c, offset(h->p, ng, rd), rd, depth + 1, w, rng_derive(seed, TAG_REFLECT));
-			col = v3_add(col, v3_mul(k, rc));
-		}
-	}
-
-	/* transparency: refraction, or total internal reflection */
-	if (td > 0) {
-		vec3 k = v3_scale(v3_max(m->tran_colour, v3(0, 0, 0)), td);
-		double w = weight * maxc(k);
-		if (w >= SHADE_MIN_WEIGHT) {
-			double eta = entering ? 1 / m->ior : m->ior;
-			double cosi = -v3_dot(n, d);
-			double k2 = 1 - eta * eta * (1 - cosi * cosi);
-			vec3 nd;
-			bool tir = k2 < 0;
-			if (tir) {
-				nd = reflect(d, n);
-			} else {
-				nd = v3_norm(v3_add(v3_scale(d, eta), v3_scale(n, eta * cosi - sqrt(k2))));
-				if (v3_dot(nd, ng) >= 0) /* perturbed normal: keep it going through */
-					nd = d;
-			}
-			if (!tir || reflections) {
-				vec3 tc = trace_from(c, offset(h->p, ng, nd), nd, depth + 1, w, rng_derive(seed, TAG_REFRACT));
-				col = v3_add(col, v3_mul(k, tc));
-			}
-		}
-	}
+	struct ray sr;
+	double w;
+	vec3 k;
+	if (reflect_ray(c, r, sf, weight, &sr, &w, &k))
+		col = v3_add(col, v3_mul(k, trace(c, &sr, depth + 1, w, rng_derive(seed, TAG_REFLECT))));
+	if (refract_ray(c, r, sf, weight, &sr, &w, &k))
+		col = v3_add(col, v3_mul(k, trace(c, &sr, depth + 1, w, rng_derive(seed, TAG_REFRACT))));
 	return col;
 }
 
@@ -938,30 +952,159 @@ static void shadow_packets_transparent(const struct shade_ctx *c, const struct s
 	}
 }
 
-/* shade_eye_hit4 in a scene with transparent materials: room for the
- * shadow rays' first hits. */
-static __attribute__((noinline)) void eye_hit4_transparent(const struct shade_ctx *c, const struct ray u[4],
-							    const struct hit *h[4], const uint64_t seed[4], int n,
-							    vec3 out[4])
+/*
+ * BLOCK SHADING (scenes with transparent materials). The hits of a 2x2
+ * block of eye rays are shaded together (shade_eye_hit4); where a block's
+ * hits lie on one flat patch (block_flat), their mirror rays and their
+ * refracted rays are as coherent as the eye rays were: each kind goes as
+ * one packet (block_trace, accel_intersect4) and its hits are shaded as a
+ * block in turn, down to LIM_TRACE_DEPTH. Anywhere else a hit is shaded
+ * alone (surf_shade) and its rays go one at a time. block_shade sums each
+ * ray's terms in surf_shade's order (direct, then reflection, then
+ * refraction) with the same functions (surf_shade at the depth limit
+ * for the first, reflect_ray, refract_ray), and the random streams are per ray (rng_derive), so every
+ * colour is surf_shade's, bit for bit, whatever the order of tracing.
+ *
+ * Where it pays (docs/performance.md, round 6): refraction through the
+ * flat faces of glass (gears_s2). Mirror rays off curved surfaces diverge,
+ * so their packets cost as much as single rays (balls_s4, rings_s3); the
+ * shadow rays of secondary hits as occlusion packets cost more than they
+ * saved; and the block path's overhead made the opaque SPD scenes slower,
+ * so opaque scenes keep the per-hit path.
+ */
+/* Hits whose shading normals have a dot product of at least this with the
+ * first one's count as one flat patch (a plane, a polygon, coplanar
+ * triangles); neighbouring normals on the SPD spheres differ by more. */
+#define SHADE_FLAT_COS 0.99999
+/* A packet's rays must be of one octant (accel_intersect4 traces other
+ * packets a lane at a time) and within this angle of the first ray. */
+#define SHADE_PACKET_COS 0.9
+
+/* Whether the prepared hits sf[k] (ok[k], k < n) are at least two and
+ * their shading normals all but parallel (a flat patch). */
+static inline bool block_flat(const struct surf sf[4], const bool ok[4], int n)
+{
+	int first = -1, m = 0;
+	for (int k = 0; k < n; k++) {
+		if (!ok[k])
+			continue;
+		m++;
+		if (first < 0)
+			first = k;
+		else if (!(v3_dot(sf[k].n, sf[first].n) >= SHADE_FLAT_COS))
+			return false;
+	}
+	return m >= 2;
+}
+
+static void block_trace(const struct shade_ctx *c, struct ray r[4], int n, int depth, const double weight[4],
+			const uint64_t seed[4], vec3 out[4]);
+
+/* The secondary rays of one kind (refl: mirror, else transmitted) of the
+ * prepared hits sf[k] (ok[k]) of rays r[k], traced together and added to
+ * out[k]. */
+static inline void block_secondary(const struct shade_ctx *c, const struct ray r[4], const struct surf sf[4],
+				   const bool ok[4], int n, int depth, const double weight[4],
+				   const uint64_t seed[4], bool refl, vec3 out[4])
+{
+	struct ray sr[4];
+	double w[4];
+	vec3 k[4];
+	uint64_t ss[4];
+	int who[4], m = 0;
+	for (int j = 0; j < n; j++) {
+		if (!ok[j])
+			continue;
+		bool any = refl ? reflect_ray(c, &r[j], &sf[j], weight[j], &sr[m], &w[m], &k[m])
+				: refract_ray(c, &r[j], &sf[j], weight[j], &sr[m], &w[m], &k[m]);
+		if (!any)
+			continue;
+		ss[m] = rng_derive(seed[j], refl ? TAG_REFLECT : TAG_REFRACT);
+		who[m++] = j;
+	}
+	if (!m)
+		return;
+	vec3 col[4];
+	block_trace(c, sr, m, depth + 1, w, ss, col);
+	for (int j = 0; j < m; j++)
+		out[who[j]] = v3_add(out[who[j]], v3_mul(k[j], col[j]));
+}
+
+/* surf_shade of the prepared hits sf[k] (ok[k]; black otherwise) of rays
+ * r[k], k < n, into out[k]: as a block on a flat patch, else one by one. */
+static void block_shade(const struct shade_ctx *c, const struct ray r[4], const struct surf sf[4], const bool ok[4],
+			int n, int depth, const double weight[4], const uint64_t seed[4],
+			const struct shadow_pre pre[4], vec3 out[4])
+{
+	if (depth >= LIM_TRACE_DEPTH || !block_flat(sf, ok, n)) {
+		for (int k = 0; k < n; k++)
+			out[k] = ok[k] ? surf_shade(c, &r[k], &sf[k], depth, weight[k], seed[k], &pre[k]) : v3(0, 0, 0);
+		return;
+	}
+	for (int k = 0; k < n; k++) /* at the depth limit, surf_shade is the direct term alone */
+		out[k] = ok[k] ? surf_shade(c, &r[k], &sf[k], LIM_TRACE_DEPTH, weight[k], seed[k], &pre[k]) : v3(0, 0, 0);
+	block_secondary(c, r, sf, ok, n, depth, weight, seed, true, out);
+	block_secondary(c, r, sf, ok, n, depth, weight, seed, false, out);
+}
+
+/*
+ * trace_hit of n <= 4 rays r[k] whose closest hits are h[k] (NULL: a miss,
+ * black), into out[k], in a scene with transparent materials. The eye
+ * hits' shadow rays go as packets (shadow_packets_transparent, with room
+ * for their first hits); deeper hits' go one at a time.
+ */
+static __attribute__((noinline)) void block_hits(const struct shade_ctx *c, const struct ray r[4],
+						  const struct hit *h[4], int n, int depth, const double weight[4],
+						  const uint64_t seed[4], vec3 out[4])
 {
 	struct surf sf[4];
 	bool ok[4] = { false, false, false, false };
 	for (int k = 0; k < n; k++)
-		ok[k] = h[k] && surf_prepare(c, &u[k], h[k], &sf[k]);
+		ok[k] = h[k] && surf_prepare(c, &r[k], h[k], &sf[k]);
 	struct shadow_pre pre[4];
 	struct hit first[4][SHADE_PRE_TLIGHTS];
 	for (int k = 0; k < 4; k++)
 		pre[k].first = first[k];
-	shadow_packets_transparent(c, sf, ok, n, pre);
+	if (depth == 0)
+		shadow_packets_transparent(c, sf, ok, n, pre);
+	else
+		packet_lights(c, pre); /* nothing known */
+	block_shade(c, r, sf, ok, n, depth, weight, seed, pre, out);
+}
+
+/* trace() of n (1..4) rays r[k], k < n, into out[k]; lanes n..3 of r are
+ * overwritten. Two to four rays of one octant, near each other, are one
+ * packet (lanes past n repeat the last ray) whose hits are shaded as a
+ * block; other rays go through trace() one at a time. */
+static void block_trace(const struct shade_ctx *c, struct ray r[4], int n, int depth, const double weight[4],
+			const uint64_t seed[4], vec3 out[4])
+{
+	unsigned oct = octant(r[0].d);
+	bool one = n >= 2;
+	for (int k = 1; k < n; k++)
+		one &= octant(r[k].d) == oct && v3_dot(r[k].d, r[0].d) >= SHADE_PACKET_COS;
+	struct hit hh[4];
+	bool hit[4];
+	if (one) {
+		for (int k = n; k < 4; k++)
+			r[k] = r[n - 1];
+		accel_intersect4(c->a, r, hh, hit);
+	} else {
+		for (int k = 0; k < n; k++)
+			hit[k] = accel_intersect(c->a, &r[k], &hh[k]);
+	}
+	const struct hit *hp[4] = { NULL, NULL, NULL, NULL };
 	for (int k = 0; k < n; k++)
-		out[k] = ok[k] ? surf_shade(c, &u[k], &sf[k], 0, 1.0, seed[k], &pre[k]) : v3(0, 0, 0);
+		hp[k] = hit[k] ? &hh[k] : NULL;
+	block_hits(c, r, hp, n, depth, weight, seed, out);
 }
 
 void shade_eye_hit4(const struct shade_ctx *c, const struct ray u[4], const struct hit *h[4],
 		    const uint64_t seed[4], int n, vec3 out[4])
 {
-	if (c->any_transparent) {
-		eye_hit4_transparent(c, u, h, seed, n, out);
+	if (c->any_transparent) { /* BLOCK SHADING */
+		static const double one[4] = { 1.0, 1.0, 1.0, 1.0 };
+		block_hits(c, u, h, n, 0, one, seed, out);
 		return;
 	}
 	struct surf sf[4];

@@ -43,7 +43,10 @@ vec3 shade_eye_hit(const struct shade_ctx *c, const struct ray *u, const struct 
 /*
  * shade_eye_hit of n <= 4 neighbouring eye rays (a 2x2 block): out[k] is
  * shade_eye_hit(c, &u[k], h[k], seed[k]) bit for bit; their hits' shadow
- * rays toward each point light are traced together (accel_occluded4).
+ * rays toward each point light are traced together (accel_occluded4). In
+ * a scene with transparent materials, the mirror and refracted rays of
+ * hits on one flat patch go as packets too (accel_intersect4), down to
+ * LIM_TRACE_DEPTH (BLOCK SHADING in shade.c).
  */
 void shade_eye_hit4(const struct shade_ctx *c, const struct ray u[4], const struct hit *h[4],
 		    const uint64_t seed[4], int n, vec3 out[4]);
