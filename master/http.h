@@ -97,6 +97,10 @@ int http_parse(const char *req, size_t len, bool any_host, struct http_request *
  */
 void http_to_rgb8(const uint8_t *px, uint32_t bpp, size_t n_px, uint8_t *rgb);
 
+/* Base64 (RFC 4648, padded) of in[0..n) into out (4 * ((n + 2) / 3) bytes,
+ * no terminator); returns the length written. */
+size_t http_base64(const uint8_t *in, size_t n, char *out);
+
 /* master/view_page.c: the page */
 extern const char view_page[];
 extern const size_t view_page_len;

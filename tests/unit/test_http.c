@@ -1,10 +1,10 @@
 /*
- * test_http.c - the live view's request parser (master/http.c, http_parse):
+ * test_http.c - the live view's request parser (master/http_parse.c, http_parse):
  * what each request line and header set is answered with, the Host check
  * against DNS rebinding, and that no prefix of a good request (a head cut
  * anywhere, as a slow peer's bytes arrive) is taken for a request; and the
  * pixels shown (http_to_rgb8): RGB8 as it is, floats rounded as an 8-bit
- * file rounds them.
+ * file rounds them; and base64 (http_base64) against RFC 4648's vectors.
  */
 #include <string.h>
 
@@ -19,9 +19,24 @@ static int parse(const char *req, bool any_host, struct http_request *rq)
 
 static int code(const char *req) { struct http_request rq; return parse(req, false, &rq); }
 
+/* RFC 4648, section 10: BASE64("") .. BASE64("foobar") */
+static void test_base64(void)
+{
+	static const char *want[] = { "", "Zg==", "Zm8=", "Zm9v", "Zm9vYg==", "Zm9vYmE=", "Zm9vYmFy" };
+	char out[16];
+	for (size_t n = 0; n <= 6; n++) {
+		size_t m = http_base64((const uint8_t *)"foobar", n, out);
+		CHECK(m == strlen(want[n]) && memcmp(out, want[n], m) == 0);
+	}
+	const uint8_t hi[3] = { 0xff, 0xfe, 0xfd }; /* the table's last letters */
+	CHECK(http_base64(hi, 3, out) == 4 && memcmp(out, "//79", 4) == 0);
+}
+
 int main(void)
 {
 	struct http_request rq;
+
+	test_base64();
 
 	/* the three paths, GET and HEAD, queries ignored */
 	CHECK(parse("GET / HTTP/1.1\r\nHost: 127.0.0.1:8080\r\n\r\n", false, &rq) == 200);
