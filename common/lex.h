@@ -123,6 +123,10 @@ enum keyword lex_keyword(const char *w, size_t n);
  * (number-like but malformed or not finite) or NUM_NO (not number-like). */
 int lex_number(const char *w, size_t n, double *v);
 
+/* 10^0 .. 10^22: all exactly representable doubles (the fast paths of
+ * lex_number and raw.c's number reader). */
+extern const double lex_pow10[23];
+
 /*
  * Reads the text file at path whole into *buf (malloc'd, caller frees; room
  * for one byte past *len), reading at most limit bytes: the one reader for

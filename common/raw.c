@@ -69,12 +69,6 @@
 
 /* ---- numbers ------------------------------------------------------------ */
 
-/* Exact powers of ten: 10^0 .. 10^22 are all exactly representable. */
-static const double raw_pow10[23] = {
-	1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
-	1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-};
-
 static inline int raw_is_blank(char c)
 {
 	return c == ' ' || c == '\t' || c == '\v' || c == '\f';
@@ -125,7 +119,7 @@ static int raw_number(const char **pp, const char *end, double *out)
 		if (nd + frac > 0 && nd + frac <= 19 && frac <= 22 && v <= (1ull << 53) &&
 		    (q == end || raw_is_blank(*q) || *q == '\n' || *q == '\r')) {
 			double x = (double)v;
-			x = frac ? x / raw_pow10[frac] : x;
+			x = frac ? x / lex_pow10[frac] : x;
 			if (!(x <= LIM_RAW_COORD))
 				return RAW_NUM_RANGE;
 			*out = neg ? -x : x;
@@ -194,7 +188,7 @@ static int raw_number(const char **pp, const char *end, double *out)
 		x = 0.0;
 	} else if (!dropped && m <= (1ull << 53) && exp10 >= -22 && exp10 <= 22) {
 		x = (double)m;
-		x = exp10 < 0 ? x / raw_pow10[-exp10] : x * raw_pow10[exp10];
+		x = exp10 < 0 ? x / lex_pow10[-exp10] : x * lex_pow10[exp10];
 	} else {
 		/* unusual input: let the C library round it correctly */
 		char tmp[LIM_TOKEN_LEN + 1];
