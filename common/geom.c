@@ -371,43 +371,6 @@ static inline __attribute__((always_inline)) bool sphere_roots(vec3 oc, vec3 d, 
 	return true;
 }
 
-/*
- * CYLINDER PRE-TEST. True only when sphere_roots(op, dp, r2, ...) is sure
- * to return false: the line op + t dp (dp not 0) passes farther than r from
- * the origin. It has no division, where sphere_roots divides twice before
- * it can tell, so the cylinder tests run it first and then the exact code
- * unchanged: every hit and every miss is the one the exact code gives.
- *
- * Why it is conservative (u = 2^-53; op, dp the doubles sphere_roots gets;
- * A = |dp|^2, F = the line's true closest point to the origin, so
- * |F| = |op x dp| / |dp| <= |op|). sphere_roots rejects when its computed
- * s = f.f exceeds r2 (then h2 = (r2 - s) / a < 0). Following its steps,
- * its b, a, tc and f = op + dp tc carry errors that give
- * |f - F| <= 8.1u |op| + u |F|, and s >= |f|^2 (1 - 3.01u). Here
- * |op x dp|^2 = |op|^2 A - B^2 (B = op.dp) is computed as oo a - b b with
- * an absolute error below 16u |op|^2 A (cancellation included), so the
- * test oo a - b b > a (r2 + 2^-39 oo) (1 + 2^-38), rounding included,
- * gives |F|^2 > (1 + c)(r2 + c |op|^2) >= (r + c |op|)^2 with c = 2^-40
- * (2ry <= c r^2 + y^2 / c): |F| > r + c |op|. As |op| >= |F| > r,
- * |f| (1 - 1.5u) > r (1 + c - 11u) and s > r^2 (1 + 2^-40) > fl(r * r):
- * the exact test rejects, by a margin of about 2^-40 |op| in distance.
- * The bounds hold for normal numbers: the guards keep |op|^2 and |dp|^2
- * within 2^-400 .. 2^400 (no overflow, and no underflow that matters: an
- * underflowing product errs by 2^-1074, far below 2^-40 |op|^2 A), and
- * then s - r2 >= about 2^-80 |op|^2 keeps h2 a negative normal number, not
- * -0. Otherwise (NaN, infinities, extreme scales) it says false and the
- * exact code decides. tests/unit/test_geom_prim.c fails when the margin is
- * removed, or keeps only its relative part (far origins).
- */
-static inline __attribute__((always_inline)) bool cyl_line_far(vec3 op, vec3 dp, double r2)
-{
-	double a = v3_dot(dp, dp), oo = v3_dot(op, op);
-	if (!(a > 0x1p-400 && a < 0x1p400 && oo > 0x1p-400 && oo < 0x1p400))
-		return false;
-	double b = v3_dot(op, dp);
-	return oo * a - b * b > a * (r2 + 0x1p-39 * oo) * (1 + 0x1p-38);
-}
-
 /* Infinite cylinder side roots (axis through `from` along unit a). Returns
  * 0 miss, 1 roots in t0 <= t1, 2 the whole line is inside (parallel ray). */
 static inline __attribute__((always_inline)) int cyl_side_roots(const struct geom_obj *g, vec3 o, vec3 d, double *t0,
@@ -420,8 +383,6 @@ static inline __attribute__((always_inline)) int cyl_side_roots(const struct geo
 	double r2 = g->u.cyl.r * g->u.cyl.r;
 	if (v3_dot(dp, dp) <= 1e-30 * v3_dot(d, d))
 		return v3_dot(op, op) <= r2 ? 2 : 0;
-	if (cyl_line_far(op, dp, r2))
-		return 0; /* what sphere_roots would say (CYLINDER PRE-TEST) */
 	return sphere_roots(op, dp, r2, t0, t1) ? 1 : 0;
 }
 
@@ -579,8 +540,7 @@ bool geom_intersect(const struct geom_obj *g, vec3 o, vec3 d, double tmin, doubl
 			double z0 = v3_dot(oc, a), dz = v3_dot(d, a);
 			vec3 op = v3_sub(oc, v3_scale(a, z0)), dp = v3_sub(d, v3_scale(a, dz));
 			double r2 = g->u.cyl.r * g->u.cyl.r;
-			if (v3_dot(dp, dp) <= 1e-30 * v3_dot(d, d) || cyl_line_far(op, dp, r2) ||
-			    !sphere_roots(op, dp, r2, &t0, &t1))
+			if (v3_dot(dp, dp) <= 1e-30 * v3_dot(d, d) || !sphere_roots(op, dp, r2, &t0, &t1))
 				return false; /* parallel to the axis: only the (open) ends */
 			double za = z0 + t0 * dz, zb = z0 + t1 * dz, h = g->u.cyl.h;
 			if (za >= 0 && za <= h && in_range(t0, tmin, tmax)) {
