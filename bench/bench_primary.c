@@ -1,8 +1,10 @@
 /*
  * bench_primary.c - the A/B figure for work on the tracing core: primary
  * rays (camera ray + closest hit, no shading) through every pixel centre,
- * traced as the renderer traces them (2x2 blocks of pixels through
- * accel_intersect4; --single: one accel_intersect per ray), one thread, the
+ * made and traced as the renderer makes and traces them (2x2 blocks of
+ * pixels, their rays from filter_eye_block when the scene's filter is
+ * standard, through accel_intersect4; --single: cam_ray and one
+ * accel_intersect per ray), one thread, the
  * same frame traced FRAMES times; prints the best frame's
  * rate in Mrays/s of thread CPU time (repeatable to ~0.5% where the
  * wall-clock figures of bench_render wander by ~5%) and a hash of every hit
@@ -22,6 +24,7 @@
 
 #include "common/accel.h"
 #include "common/camera.h"
+#include "common/filter.h"
 #include "bench/bench_scene.h"
 
 /* FNV-1a over n bytes. */
@@ -62,10 +65,13 @@ static void frame_single(const struct accel *a, const struct cam *c, uint64_t *h
 		*hash = h64;
 }
 
-/* The same frame in 2x2 blocks, as the renderer traces it (a block past
- * the image's edge repeats its last row or column); the same hash. */
-static void frame_packets(const struct accel *a, const struct cam *c, uint64_t *hash, struct hit *row2,
-			  bool *hit2)
+/* The same frame in 2x2 blocks, as the renderer traces it: a whole
+ * block's rays from filter_eye_block when fc is not NULL (a
+ * filter_single_ray chain: the same rays as cam_ray bit for bit), else
+ * from cam_ray (a block past the image's edge repeats its last row or
+ * column); the same hash. */
+static void frame_packets(const struct accel *a, const struct cam *c, const struct filter_chain *fc, uint64_t *hash,
+			  struct hit *row2, bool *hit2)
 {
 	uint64_t h64 = 1469598103934665603ull;
 	for (uint32_t y = 0; y < c->h; y += 2) {
@@ -73,7 +79,13 @@ static void frame_packets(const struct accel *a, const struct cam *c, uint64_t *
 			struct ray r[4];
 			struct hit h[4];
 			bool hit[4];
-			bs_block_hits(a, c, x, y, r, h, hit);
+			if (fc && x + 1 < c->w && y + 1 < c->h) {
+				uint64_t seed[4];
+				filter_eye_block(fc, x, y, r, seed);
+				accel_intersect4(a, r, h, hit);
+			} else {
+				bs_block_hits(a, c, x, y, r, h, hit);
+			}
 			if (!hash)
 				continue;
 			for (uint32_t i = 0; i < 4; i++) {
@@ -119,6 +131,12 @@ int main(int argc, char **argv)
 		scene_free(s);
 		return 1;
 	}
+	/* the renderer's eye rays when it makes them by filter_eye_block */
+	struct filter_chain *fc = malloc(sizeof *fc);
+	if (fc && (filter_chain_init(fc, &s->camera, &s->image, w, h) < 0 || !filter_single_ray(fc))) {
+		free(fc);
+		fc = NULL;
+	}
 	struct hit *row2 = malloc(2 * (size_t)w * sizeof *row2);
 	bool *hit2 = malloc(2 * (size_t)w * sizeof *hit2);
 	if (!row2 || !hit2) {
@@ -128,20 +146,22 @@ int main(int argc, char **argv)
 	/* hashing costs time: frames of their own, untimed */
 	uint64_t hash = 0, hash_p = 0;
 	frame_single(a, &c, &hash);
-	frame_packets(a, &c, &hash_p, row2, hit2);
+	frame_packets(a, &c, fc, &hash_p, row2, hit2);
 	double best = INFINITY;
 	for (int i = 0; i < frames; i++) {
 		double t0 = bs_cpu_now();
 		if (single)
 			frame_single(a, &c, NULL);
 		else
-			frame_packets(a, &c, NULL, NULL, NULL);
+			frame_packets(a, &c, fc, NULL, NULL, NULL);
 		double t = bs_cpu_now() - t0;
 		best = t < best ? t : best;
 	}
 	printf("%s %ux%u: %.2f Mrays/s on 1 thread, %s (best of %d frames, thread CPU time); hits hash %016llx%s\n",
-	       path, w, h, (double)w * h / best * 1e-6, single ? "single rays" : "2x2 packets", frames,
+	       path, w, h, (double)w * h / best * 1e-6,
+	       single ? "single rays" : fc ? "2x2 packets, filter_eye_block" : "2x2 packets, cam_ray", frames,
 	       (unsigned long long)hash, hash == hash_p ? "" : " MISMATCH: packets and single rays differ");
+	free(fc);
 	free(row2);
 	free(hit2);
 	accel_free(a);
