@@ -2,7 +2,7 @@
  * accel_build.c - building the multi-level BVH: one group for the scene's
  * roots and one per define (built once, on first use), every object turned
  * into references (accel.c's header describes them), sliver triangles split
- * into several boxes, instance transforms rounded to the float inverse the
+ * into several boxes and long tilted cylinders sliced, instance transforms rounded to the float inverse the
  * traversal uses, and the nesting depths checked before anything is built.
  *
  * The build polls the calling thread's cancel flag (cancel.h) in every loop
