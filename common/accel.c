@@ -13,7 +13,9 @@
  *              triangles get several references (early split clipping)
  *   xprims     everything else (transformed spheres, planes, disks,
  *              cylinders, boxes, polygons, CSG nodes): the ray goes into
- *              the object's space through its inverse transform
+ *              the object's space through its inverse transform; long
+ *              tilted cylinders get several references (LONG CYLINDERS
+ *              in accel_build.c)
  *   instances  (the instance object: 4 bytes; the scene holds its define,
  *              material and transform), evaluated in double; the
  *              instance's geometry is exactly the inverse of its inverse

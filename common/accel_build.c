@@ -2,7 +2,7 @@
  * accel_build.c - building the multi-level BVH: one group for the scene's
  * roots and one per define (built once, on first use), every object turned
  * into references (accel.c's header describes them), sliver triangles split
- * into several boxes, instance transforms rounded to the float inverse the
+ * into several boxes and long tilted cylinders sliced, instance transforms rounded to the float inverse the
  * traversal uses, and the nesting depths checked before anything is built.
  *
  * The build polls the calling thread's cancel flag (cancel.h) in every loop
@@ -311,6 +311,68 @@ static int push_triangle(struct refbuf *rb, uint32_t ref, vec3 a, vec3 b, vec3 c
 		return refbuf_push(rb, ref, pad_box(bx));
 	vec3 p[3] = { a, b, c };
 	return push_pieces(rb, ref, p, 3, 0);
+}
+
+/*
+ * LONG CYLINDERS. A tilted cylinder's box is mostly empty (in rings_s3 its
+ * surface area is 4.4 times the cylinder's): a cylinder, capped or open,
+ * is referenced by the boxes of n <= CYL_SLICES_MAX slices of its axis
+ * segment, each grown by the extent of a disk across the axis, where that
+ * makes the boxes' total area at most CYL_SPLIT_GAIN of the one box's. By
+ * Cauchy's formula the area is proportional to how many boxes a random
+ * line meets, so to the cylinder tests. The slice between two cuts holds
+ * every disk across the axis there (the caps are the end disks); the cuts
+ * are points of the one axis, each computed once for both its slices, and
+ * pad_box covers their rounding as it covers that of the ends (`to` below
+ * is geom_obj_local_bounds' expression). Every reference tests the whole
+ * cylinder: a ray meeting two slices tests it twice and finds the same t
+ * (geom_intersect reports the first root after tmin, if it is below tmax,
+ * whatever tmax is), which does not beat itself (CANONICAL TIES in
+ * accel.c): the hits are the one box's, bit for bit.
+ */
+#define CYL_SLICES_MAX 8
+#define CYL_SPLIT_GAIN 0.9
+
+static double surf_area(struct geom_box b)
+{
+	vec3 e = v3_sub(b.hi, b.lo);
+	return 2 * (e.x * e.y + e.y * e.z + e.z * e.x);
+}
+
+/* Slice k of n of cylinder go: its box in the parent's space, unpadded. */
+static struct geom_box cyl_slice(const struct geom_obj *go, vec3 e, uint32_t k, uint32_t n)
+{
+	vec3 from = go->u.cyl.from, a = go->u.cyl.a;
+	double h = go->u.cyl.h;
+	vec3 p = k == 0 ? from : v3_add(from, v3_scale(a, h * k / n));
+	vec3 q = k + 1 == n ? v3_add(from, v3_scale(a, h)) : v3_add(from, v3_scale(a, h * (k + 1) / n));
+	struct geom_box b = { v3_sub(v3_min(p, q), e), v3_add(v3_max(p, q), e) };
+	return go->has_xform ? geom_box_xform(&go->fwd, b) : b;
+}
+
+/* An xprim's references: one of box bx, or a long cylinder's slices. */
+static int push_xprim(struct refbuf *rb, uint32_t ref, const struct geom_obj *go, struct geom_box bx)
+{
+	if (go->kind != PRIM_CYLINDER)
+		return refbuf_push(rb, ref, pad_box(bx));
+	vec3 a = go->u.cyl.a;
+	double r = go->u.cyl.r; /* geom.c's disk_extent */
+	vec3 e = v3(r * sqrt(fmax(0, 1 - a.x * a.x)), r * sqrt(fmax(0, 1 - a.y * a.y)), r * sqrt(fmax(0, 1 - a.z * a.z)));
+	double best = CYL_SPLIT_GAIN * surf_area(bx);
+	uint32_t n_best = 1;
+	for (uint32_t n = 2; n <= CYL_SLICES_MAX; n++) {
+		double sum = 0;
+		for (uint32_t k = 0; k < n; k++)
+			sum += surf_area(cyl_slice(go, e, k, n));
+		if (sum < best)
+			best = sum, n_best = n;
+	}
+	if (n_best == 1)
+		return refbuf_push(rb, ref, pad_box(bx));
+	for (uint32_t k = 0; k < n_best; k++)
+		if (refbuf_push(rb, ref, pad_box(cyl_slice(go, e, k, n_best))) < 0)
+			return -1;
+	return 0;
 }
 
 /* Whether child c of node nd is a leaf of one to ACCEL_MAX_LEAF
@@ -652,7 +714,7 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			unb[n_unb++] = ref;
 			continue;
 		}
-		if (refbuf_push(&rb, ref, pad_box(bx)) < 0)
+		if (push_xprim(&rb, ref, xp->g, bx) < 0)
 			goto oom;
 	}
 	uint32_t n_bounded = rb.n;

@@ -420,6 +420,94 @@ static void mixed(void)
 	scene_free(s);
 }
 
+/*
+ * Long tilted cylinders, capped and open, some transformed (LONG CYLINDERS
+ * in accel_build.c: each referenced by the boxes of up to 8 slices of its
+ * axis), near the origin and 1e4 units away: random rays (BVH, brute
+ * force, occlusion, packets) and rays aimed at points of the surface at
+ * every cut a slicing into 2..8 could make, at the rims and on the caps,
+ * exactly and off by 1e-12 to 1e-6 of the length, as packets of four:
+ * accel_intersect is brute force's and accel_intersect4's hit, bit for bit,
+ * and accel_occluded and accel_occluded4 agree. Checked to fail with
+ * slices whose boxes leave out the disk's extent (e = 0) or end a quarter
+ * of a slice short of each cut (a tenth is hidden by the disk's extent).
+ */
+#define N_CYL 240
+static void long_cylinders(void)
+{
+	for (int far = 0; far < 2; far++) {
+		struct scene *s = scene_new();
+		struct scene_error err;
+		vec3 at = far ? v3(1e4, -2e4, 3e4) : v3(0, 0, 0);
+		struct prim_cylinder cyl[N_CYL];
+		bool plain[N_CYL];
+		for (int i = 0; i < N_CYL; i++) {
+			struct scene_object o;
+			scene_object_defaults(&o, PRIM_CYLINDER);
+			vec3 p = v3_add(at, v3(4 * rng_uniform(51, 3 * i), 4 * rng_uniform(51, 3 * i + 1), 4 * rng_uniform(51, 3 * i + 2)));
+			double len = 0.5 + 2.5 * rng_uniform(52, i);
+			o.u.cylinder.from = p;
+			o.u.cylinder.to = v3_add(p, v3_scale(unit_dir(53, (uint64_t)i), len));
+			o.u.cylinder.radius = len * (0.01 + 0.14 * rng_uniform(54, i));
+			o.u.cylinder.capped = i % 2 == 0;
+			plain[i] = i % 4 != 3;
+			if (!plain[i]) { /* stretched, rotated and moved: slices in the object's space */
+				scene_xform_op(&o.xform, XF_TRANSLATE, 0, 0, v3_neg(p)); /* about p */
+				scene_xform_op(&o.xform, XF_STRETCH, i % 3, 0.5 + rng_uniform(55, i), v3(0, 0, 0));
+				scene_xform_op(&o.xform, XF_ROTATE, (i + 1) % 3, 360 * rng_uniform(56, i), v3(0, 0, 0));
+				scene_xform_op(&o.xform, XF_TRANSLATE, 0, 0, v3_add(p, v3(0.2, -0.1, 0.3)));
+				o.has_xform = true;
+			}
+			cyl[i] = o.u.cylinder;
+			uint32_t id;
+			CHECK(scene_add_object(s, &o, &id, &err) == 0);
+			CHECK(scene_add_root(s, id, &err) == 0);
+		}
+		struct accel *a;
+		CHECK(accel_build(s, &a, &err) == 0);
+		agree_accel(far ? "long tilted cylinders, 1e4 away" : "long tilted cylinders", a);
+		int mismatch = 0, hits = 0;
+		static const double offs[] = { 0, 1e-12, -1e-9, 1e-6, -1e-6 };
+		for (int k = 0; k < 6000; k++) {
+			int i = (int)(rng_uniform(57, 4ull * k) * N_CYL);
+			while (!plain[i])
+				i = (i + 1) % N_CYL;
+			vec3 from = cyl[i].from, ax = v3_sub(cyl[i].to, from);
+			vec3 au = v3_norm(ax), X, Y;
+			geom_frame(au, &X, &Y);
+			int n = 2 + k % 7, c = k % (n + 1); /* cut c of n (0 and n: the ends) */
+			double z = (double)c / n + offs[(k / 7) % 5];
+			double phi = 2 * M_PI * rng_uniform(57, 4ull * k + 1);
+			double rr = cyl[i].radius * ((k / 35) % 4 == 3 ? rng_uniform(57, 4ull * k + 2) : 1); /* some on a cap */
+			vec3 target = v3_add(v3_add(from, v3_scale(ax, z)), v3_add(v3_scale(X, rr * cos(phi)), v3_scale(Y, rr * sin(phi))));
+			vec3 o = v3_add(target, v3_scale(unit_dir(58, (uint64_t)k), 0.5 + 3 * rng_uniform(57, 4ull * k + 3)));
+			struct ray r[4];
+			for (int l = 0; l < 4; l++) {
+				double e = 1e-7 * cyl[i].radius;
+				vec3 tl = v3_add(target, v3_add(v3_scale(X, e * ((l & 1) ? 1 : -1)), v3_scale(au, e * ((l & 2) ? 1 : -1))));
+				r[l] = (struct ray){ o, v3_sub(tl, o), 0, k % 5 == 4 ? 1 - 1e-9 : INFINITY };
+			}
+			struct hit h4[4], h1, hb;
+			bool hit4[4], occ4[4];
+			uint32_t hint = ACCEL_NO_HINT;
+			accel_intersect4(a, r, h4, hit4);
+			accel_occluded4(a, r, occ4, &hint);
+			for (int l = 0; l < 4; l++) {
+				bool b1 = accel_intersect(a, &r[l], &h1), bb = accel_intersect_brute(a, &r[l], &hb);
+				mismatch += !same_hit(b1, &h1, hit4[l], &h4[l]) || !same_hit(b1, &h1, bb, &hb);
+				mismatch += occ4[l] != bb || accel_occluded(a, &r[l]) != bb;
+				hits += b1;
+			}
+		}
+		printf("long tilted cylinders (%s): 24000 rays at their cuts, rims and caps, %d hits, %d mismatches\n",
+		       far ? "1e4 away" : "at the origin", hits, mismatch);
+		CHECK(mismatch == 0);
+		CHECK(hits > 12000);
+		accel_free(a);
+		scene_free(s);
+	}
+}
+
 /* A define under a random rotation and translation in the 10-unit cube. */
 static uint32_t random_instance(struct scene *s, uint32_t define, uint64_t seed)
 {
@@ -812,6 +900,7 @@ int main(void)
 	packet_setup();
 	far_away();
 	mixed();
+	long_cylinders();
 	many_instances();
 	instances_beyond_floats();
 	static const char *const scenes[] = { "tests/data/spd/balls_s4.sce", "tests/data/spd/gears_s2.sce",
