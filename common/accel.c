@@ -971,6 +971,22 @@ static inline __attribute__((always_inline)) uint32_t block_occluded(const struc
 	return ACCEL_NO_HINT;
 }
 
+/* The children in mask m (bit c: child c) by entry distance key[c],
+ * nearest first, ties in slot order, into cs; returns how many. */
+static inline __attribute__((always_inline)) int children_by_entry(int m, const float key[4], int cs[4])
+{
+	int k = 0;
+	for (int c = 0; c < 4; c++) {
+		if (!(m >> c & 1))
+			continue;
+		int j = k++;
+		for (; j > 0 && key[cs[j - 1]] > key[c]; j--)
+			cs[j] = cs[j - 1];
+		cs[j] = c;
+	}
+	return k;
+}
+
 /* The BVH traversal of g's bounded references: nearest child first,
  * subtrees behind the closest hit so far popped and dropped. Same contract
  * as ref_test. chunked: g has big leaves (group.big_leaf), tested
@@ -1036,15 +1052,7 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 				continue;
 			}
 			if (m) { /* nearest first; the others pushed farthest first */
-				int cs[4], k = 0;
-				for (int c = 0; c < 4; c++) {
-					if (!(m >> c & 1))
-						continue;
-					int j = k++;
-					for (; j > 0 && tn[cs[j - 1]] > tn[c]; j--)
-						cs[j] = cs[j - 1];
-					cs[j] = c;
-				}
+				int cs[4], k = children_by_entry(m, tn, cs);
 				for (int j = k - 1; j >= 1; j--) {
 					stack[sp].idx = nd->idx[cs[j]];
 					stack[sp].n = nd->n[cs[j]];
@@ -1649,15 +1657,7 @@ static inline __attribute__((always_inline)) void bvh_hit4o(const struct accel *
 			if (m) {
 				float key[4];
 				_mm_storeu_ps(key, t0);
-				int cs[4], k = 0;
-				for (int c = 0; c < 4; c++) {
-					if (!(m >> c & 1))
-						continue;
-					int j = k++;
-					for (; j > 0 && key[cs[j - 1]] > key[c]; j--)
-						cs[j] = cs[j - 1];
-					cs[j] = c;
-				}
+				int cs[4], k = children_by_entry(m, key, cs);
 				for (int j = k - 1; j >= 1; j--) {
 					stack[sp].idx = nd->idx[cs[j]];
 					stack[sp].n = nd->n[cs[j]];
