@@ -17,7 +17,6 @@
 #include "master/http.h"
 
 #include <errno.h>
-#include <stdarg.h>
 #include <poll.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -75,40 +74,6 @@ struct http {
 	char scene[256];        /* the scene's file name, JSON-escaped */
 };
 
-/* ---- small helpers ---- */
-
-static void put_str(struct proto_wbuf *b, const char *s) { proto_put_bytes(b, s, strlen(s)); }
-
-static void put_fmt(struct proto_wbuf *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void put_fmt(struct proto_wbuf *b, const char *fmt, ...)
-{
-	char tmp[512];
-	va_list ap;
-	va_start(ap, fmt);
-	int n = vsnprintf(tmp, sizeof tmp, fmt, ap);
-	va_end(ap);
-	if (n > 0)
-		proto_put_bytes(b, tmp, (size_t)n < sizeof tmp ? (size_t)n : sizeof tmp - 1);
-}
-
-/* A JSON string: quotes, backslashes, control bytes and bytes past ASCII
- * escaped (a name from a workers file or a peer need not be UTF-8). */
-static void put_json_str(struct proto_wbuf *b, const char *s)
-{
-	proto_put_u8(b, '"');
-	for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
-		if (*p == '"' || *p == '\\') {
-			proto_put_u8(b, '\\');
-			proto_put_u8(b, *p);
-		} else if (*p < 0x20 || *p >= 0x7f) {
-			put_fmt(b, "\\u%04x", *p);
-		} else {
-			proto_put_u8(b, *p);
-		}
-	}
-	proto_put_u8(b, '"');
-}
-
 /* ---- status ---- */
 
 static const char *worker_state(const struct http *h, const struct worker *w)
@@ -135,12 +100,12 @@ static void put_row(struct proto_wbuf *b, const char *name, uint32_t threads, ui
 		    const char *state, const char *problem)
 {
 	proto_put_u8(b, '{');
-	put_str(b, "\"name\":");
-	put_json_str(b, name);
-	put_fmt(b, ",\"threads\":%u,\"tiles\":%u,\"rate\":%.2f,\"state\":", threads, tiles, rate);
-	put_json_str(b, state);
-	put_str(b, ",\"problem\":");
-	put_json_str(b, problem);
+	http_put_str(b, "\"name\":");
+	http_put_json_str(b, name);
+	http_put_fmt(b, ",\"threads\":%u,\"tiles\":%u,\"rate\":%.2f,\"state\":", threads, tiles, rate);
+	http_put_json_str(b, state);
+	http_put_str(b, ",\"problem\":");
+	http_put_json_str(b, problem);
 	proto_put_u8(b, '}');
 }
 
@@ -167,12 +132,12 @@ static void status_build(struct http *h)
 	struct proto_wbuf *b = &h->status;
 	b->len = 0;
 	b->oom = 0;
-	put_fmt(b, "{\"done\":%u,\"tiles\":%u,\"elapsed\":%.2f,\"eta\":", st.done, st.n, el);
+	http_put_fmt(b, "{\"done\":%u,\"tiles\":%u,\"elapsed\":%.2f,\"eta\":", st.done, st.n, el);
 	if (st.done > 0 && st.done < st.n && !h->ended)
-		put_fmt(b, "%.1f", el * (st.n - st.done) / st.done);
+		http_put_fmt(b, "%.1f", el * (st.n - st.done) / st.done);
 	else
-		put_str(b, st.done == st.n ? "0" : "null");
-	put_fmt(b, ",\"ended\":%s,\"stopped\":%s,\"farmed\":%s,\"workers\":[", h->ended ? "true" : "false",
+		http_put_str(b, st.done == st.n ? "0" : "null");
+	http_put_fmt(b, ",\"ended\":%s,\"stopped\":%s,\"farmed\":%s,\"workers\":[", h->ended ? "true" : "false",
 		h->stopped ? "true" : "false", f->farmed ? "true" : "false");
 	const char *lstate = h->local_threads == 0 ? "off"
 			     : atomic_load(&f->local_gave_up) ? "out of memory"
@@ -193,7 +158,7 @@ static void status_build(struct http *h)
 		put_row(b, w->name, w->threads, w->tiles_done, h->rate[i], worker_state(h, w), w->why);
 		rows++;
 	}
-	put_fmt(b, "],\"more\":%u}", more);
+	http_put_fmt(b, "],\"more\":%u}", more);
 }
 
 /* ---- connections ---- */
@@ -249,24 +214,24 @@ static void append_tile_event(struct http *h, struct hconn *c, uint32_t id, bool
 	uint64_t bit = (uint64_t)1 << (id % 64);
 	if (!done) {
 		if (c->shown[word] & bit) {
-			put_fmt(&c->out, "event: undo\ndata: %u %u %u %u\n\n", r.x, r.y, r.w, r.h);
+			http_put_fmt(&c->out, "event: undo\ndata: %u %u %u %u\n\n", r.x, r.y, r.w, r.h);
 			c->shown[word] &= ~bit;
 		}
 		return;
 	}
 	http_to_rgb8(h->px, h->bpp, (size_t)r.w * r.h, h->rgb);
 	size_t n = http_base64(h->rgb, (size_t)r.w * r.h * 3, h->b64);
-	put_fmt(&c->out, "event: tile\ndata: %u %u %u %u ", r.x, r.y, r.w, r.h);
+	http_put_fmt(&c->out, "event: tile\ndata: %u %u %u %u ", r.x, r.y, r.w, r.h);
 	proto_put_bytes(&c->out, h->b64, n);
-	put_str(&c->out, "\n\n");
+	http_put_str(&c->out, "\n\n");
 	c->shown[word] |= bit;
 }
 
 static void append_status_event(struct http *h, struct hconn *c, const char *name)
 {
-	put_fmt(&c->out, "event: %s\ndata: ", name);
+	http_put_fmt(&c->out, "event: %s\ndata: ", name);
 	proto_put_bytes(&c->out, h->status.p, h->status.len);
-	put_str(&c->out, "\n\n");
+	http_put_str(&c->out, "\n\n");
 }
 
 /* The next tile of c's set, from its cursor on (wrapping); the set is not empty. */
@@ -397,14 +362,14 @@ static const char *reason(int code)
 static void put_head(struct hconn *c, int code, const char *type, long length)
 {
 	struct proto_wbuf *b = &c->out;
-	put_fmt(b, "HTTP/1.1 %d %s\r\nContent-Type: %s\r\n", code, reason(code), type);
+	http_put_fmt(b, "HTTP/1.1 %d %s\r\nContent-Type: %s\r\n", code, reason(code), type);
 	if (length >= 0)
-		put_fmt(b, "Content-Length: %ld\r\n", length);
-	put_str(b, "Cache-Control: no-store\r\nX-Content-Type-Options: nosniff\r\nConnection: close\r\n");
+		http_put_fmt(b, "Content-Length: %ld\r\n", length);
+	http_put_str(b, "Cache-Control: no-store\r\nX-Content-Type-Options: nosniff\r\nConnection: close\r\n");
 	if (code == 405)
-		put_str(b, "Allow: GET, HEAD\r\n");
+		http_put_str(b, "Allow: GET, HEAD\r\n");
 	if (code == 503)
-		put_str(b, "Retry-After: 5\r\n");
+		http_put_str(b, "Retry-After: 5\r\n");
 }
 
 /* A whole response; body may be NULL (HEAD, or none). */
@@ -416,8 +381,8 @@ static void respond(struct hconn *c, int code, const char *type, const void *bod
 	c->out.len = c->out_off = 0;
 	put_head(c, code, type, body || !head ? (long)len : -1); /* HEAD of a stream: no length */
 	if (extra)
-		put_str(&c->out, extra);
-	put_str(&c->out, "\r\n");
+		http_put_str(&c->out, extra);
+	http_put_str(&c->out, "\r\n");
 	if (body && !head)
 		proto_put_bytes(&c->out, body, len);
 	c->st = HC_RESP;
@@ -463,9 +428,9 @@ static void start_stream(struct hconn *c, bool head)
 	c->req = NULL;
 	c->out.len = c->out_off = 0;
 	put_head(c, 200, "text/event-stream", -1);
-	put_str(&c->out, "X-Accel-Buffering: no\r\n\r\nretry: 2000\n\n");
+	http_put_str(&c->out, "X-Accel-Buffering: no\r\n\r\nretry: 2000\n\n");
 	const struct farm *f = h->f;
-	put_fmt(&c->out, "event: info\ndata: {\"w\":%u,\"h\":%u,\"tiles\":%u,\"side\":%u,\"scene\":%s}\n\n", f->width,
+	http_put_fmt(&c->out, "event: info\ndata: {\"w\":%u,\"h\":%u,\"tiles\":%u,\"side\":%u,\"scene\":%s}\n\n", f->width,
 		f->height, h->n_tiles, f->tg.side, h->scene);
 	status_build(h);
 	append_status_event(h, c, "status");
@@ -719,7 +684,7 @@ int http_start(struct farm *f, int local_threads, struct http **out)
 		goto oom;
 	const char *base = strrchr(o->scene, '/');
 	struct proto_wbuf sb = { 0 };
-	put_json_str(&sb, base ? base + 1 : o->scene);
+	http_put_json_str(&sb, base ? base + 1 : o->scene);
 	snprintf(h->scene, sizeof h->scene, "%.*s", (int)sb.len, sb.oom ? "\"\"" : (const char *)sb.p);
 	if (sb.oom || sb.len >= sizeof h->scene)
 		snprintf(h->scene, sizeof h->scene, "\"scene\"");

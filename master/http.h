@@ -97,6 +97,14 @@ int http_parse(const char *req, size_t len, bool any_host, struct http_request *
  */
 void http_to_rgb8(const uint8_t *px, uint32_t bpp, size_t n_px, uint8_t *rgb);
 
+/* The responses' text: s as it is; printf's output (at most 511 bytes); s
+ * as a JSON string (quotes, backslashes, control bytes and bytes past ASCII
+ * escaped: a name from a workers file or a peer need not be UTF-8). */
+struct proto_wbuf;
+void http_put_str(struct proto_wbuf *b, const char *s);
+void http_put_fmt(struct proto_wbuf *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+void http_put_json_str(struct proto_wbuf *b, const char *s);
+
 /* Base64 (RFC 4648, padded) of in[0..n) into out (4 * ((n + 2) / 3) bytes,
  * no terminator); returns the length written. */
 size_t http_base64(const uint8_t *in, size_t n, char *out);

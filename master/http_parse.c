@@ -1,18 +1,53 @@
 /*
  * http_parse.c - the live view's parts that touch no socket (http.h):
- * parsing a request's head, base64 for the tile events, and the pixels
- * shown. Small and pure, so test_http drives them alone.
+ * parsing a request's head, the text and JSON writers of its responses,
+ * base64 for the tile events, and the pixels shown. Small and pure, so
+ * test_http drives them alone.
  */
+#include <stdarg.h>
 #include <stdbool.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <string.h>
 #include <strings.h>
 
 #include "common/filter.h"
 #include "master/http.h"
+#include "proto/buf.h"
 
 /* a request target longer than this is refused (400) */
 #define HTTP_TARGET_MAX 2048
+
+void http_put_str(struct proto_wbuf *b, const char *s) { proto_put_bytes(b, s, strlen(s)); }
+
+void http_put_fmt(struct proto_wbuf *b, const char *fmt, ...)
+{
+	char tmp[512];
+	va_list ap;
+	va_start(ap, fmt);
+	int n = vsnprintf(tmp, sizeof tmp, fmt, ap);
+	va_end(ap);
+	if (n > 0)
+		proto_put_bytes(b, tmp, (size_t)n < sizeof tmp ? (size_t)n : sizeof tmp - 1);
+}
+
+/* A JSON string: quotes, backslashes, control bytes and bytes past ASCII
+ * escaped (a name from a workers file or a peer need not be UTF-8). */
+void http_put_json_str(struct proto_wbuf *b, const char *s)
+{
+	proto_put_u8(b, '"');
+	for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+		if (*p == '"' || *p == '\\') {
+			proto_put_u8(b, '\\');
+			proto_put_u8(b, *p);
+		} else if (*p < 0x20 || *p >= 0x7f) {
+			http_put_fmt(b, "\\u%04x", *p);
+		} else {
+			proto_put_u8(b, *p);
+		}
+	}
+	proto_put_u8(b, '"');
+}
 
 size_t http_base64(const uint8_t *in, size_t n, char *out)
 {

@@ -11,6 +11,7 @@
 #include "check.h"
 #include "common/filter.h"
 #include "master/http.h"
+#include "proto/buf.h"
 
 static int parse(const char *req, bool any_host, struct http_request *rq)
 {
@@ -32,11 +33,23 @@ static void test_base64(void)
 	CHECK(http_base64(hi, 3, out) == 4 && memcmp(out, "//79", 4) == 0);
 }
 
+/* A JSON string for /status: quotes, backslashes, control bytes and bytes
+ * past ASCII escaped, the rest as it is. */
+static void test_json_str(void)
+{
+	struct proto_wbuf b = { 0 };
+	http_put_json_str(&b, "a\"b\\c\n\xc3\xa9~");
+	const char *want = "\"a\\\"b\\\\c\\u000a\\u00c3\\u00a9~\"";
+	CHECK(b.len == strlen(want) && memcmp(b.p, want, b.len) == 0);
+	proto_wbuf_free(&b);
+}
+
 int main(void)
 {
 	struct http_request rq;
 
 	test_base64();
+	test_json_str();
 
 	/* the three paths, GET and HEAD, queries ignored */
 	CHECK(parse("GET / HTTP/1.1\r\nHost: 127.0.0.1:8080\r\n\r\n", false, &rq) == 200);
