@@ -1299,46 +1299,80 @@ static inline float lanes_min(__m128 v)
 	return _mm_cvtss_f32(v);
 }
 
-/*
- * ray_box_init for four rays at once into rows (o[k][i]: ray i's o[k]):
- * the same operations, the divisions and the widening two rays at a time
- * (divpd and mulpd round as divsd and mulsd do; cvtpd2ps as cvtsd2ss), so
- * the same floats bit for bit. The scale and the origin stay scalar.
- */
-static void ray_box4(const struct trace tr[4], vec3 center, float o[3][4], float inv_near[3][4],
-		     float inv_far[3][4], double tscale[4])
+/* box_tmin and box_tmax of the four rays' tmin and tmax (times their
+ * tscale) as lanes, two at a time in registers: the same floats, without
+ * the four scalar stores that a 16-byte load would wait on. */
+static inline __m128 lanes_box_tmin(const struct trace tr[4], const double tscale[4])
 {
-	double s[4], d[3][4];
-	for (int i = 0; i < 4; i++) {
-		const struct trace *r = &tr[i];
-		double ax = fabs(r->d.x), ay = fabs(r->d.y), az = fabs(r->d.z);
-		double m = ax > ay ? ax : ay;
-		m = m > az ? m : az;
-		uint64_t bits;
-		memcpy(&bits, &m, sizeof bits);
-		int e = (int)(bits >> 52 & 0x7ff) - 1023;
-		if (e < -1000 || e > 1000)
-			e = 0; /* as ray_box_init */
-		s[i] = pow2(-e);
-		tscale[i] = pow2(e);
-		o[0][i] = (float)(r->o.x - center.x);
-		o[1][i] = (float)(r->o.y - center.y);
-		o[2][i] = (float)(r->o.z - center.z);
-		d[0][i] = r->d.x, d[1][i] = r->d.y, d[2][i] = r->d.z;
-	}
+	const __m128d f = _mm_set1_pd(1 - 0x1p-22), a = _mm_set1_pd(0x1p-140);
+	__m128d x0 = _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(&tr[0].tmin), &tr[1].tmin), _mm_loadu_pd(tscale));
+	__m128d x1 = _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(&tr[2].tmin), &tr[3].tmin), _mm_loadu_pd(tscale + 2));
+	return _mm_movelh_ps(_mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(x0, f), a)),
+			     _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(x1, f), a)));
+}
+
+static inline __m128 lanes_box_tmax(const struct trace tr[4], const double tscale[4])
+{
+	const __m128d f = _mm_set1_pd(1 + 0x1p-22), a = _mm_set1_pd(0x1p-140);
+	__m128d x0 = _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(&tr[0].tmax), &tr[1].tmax), _mm_loadu_pd(tscale));
+	__m128d x1 = _mm_mul_pd(_mm_loadh_pd(_mm_load_sd(&tr[2].tmax), &tr[3].tmax), _mm_loadu_pd(tscale + 2));
+	return _mm_movelh_ps(_mm_cvtpd_ps(_mm_add_pd(_mm_mul_pd(x0, f), a)),
+			     _mm_cvtpd_ps(_mm_add_pd(_mm_mul_pd(x1, f), a)));
+}
+
+/*
+ * ray_box_init for four rays at once, into P's rows (lane i: ray i): the
+ * same operations two rays at a time, so the same floats bit for bit
+ * (divpd and mulpd round as divsd and mulsd do, cvtpd2ps as cvtsd2ss, and
+ * maxpd picks what the scalar comparisons pick for finite directions). The
+ * scale's power of two comes from the exponent bits: 2^e is m's exponent
+ * field alone and 2^-e has the field 2046 - E. Everything stays in
+ * registers: building the pairs through arrays on the stack (8-byte
+ * stores read back by 16-byte loads) stalled store forwarding and made
+ * the set-up a tenth of tetra_s4's render.
+ */
+static void ray_box4(const struct trace tr[4], vec3 center, struct ray4x *P)
+{
 	const __m128d one = _mm_set1_pd(1.0), tiny = _mm_set1_pd(1e-30), big = _mm_set1_pd(1e30);
 	const __m128d sign = _mm_set1_pd(-0.0), wn = _mm_set1_pd(1 - BOX_WIDEN), wf = _mm_set1_pd(1 + BOX_WIDEN);
-	for (int k = 0; k < 3; k++)
-		for (int h = 0; h < 4; h += 2) {
-			__m128d dk = _mm_mul_pd(_mm_loadu_pd(&d[k][h]), _mm_loadu_pd(&s[h]));
+	const __m128d expo = _mm_castsi128_pd(_mm_set1_epi64x(0x7ff0000000000000LL));
+	const __m128i two046 = _mm_set1_epi64x(0x7fe0000000000000LL);
+	const __m128d lo_e = _mm_set1_pd(0x1p-1000), hi_e = _mm_set1_pd(0x1p1001);
+	const __m128d c[3] = { _mm_set1_pd(center.x), _mm_set1_pd(center.y), _mm_set1_pd(center.z) };
+	__m128 o[3][2], in[3][2], fa[3][2];
+	for (int h = 0; h < 2; h++) {
+		const struct trace *a = &tr[2 * h], *b = &tr[2 * h + 1];
+		/* lane pairs loaded 8 bytes at a time: the rays were just stored that way */
+		__m128d d[3] = { _mm_loadh_pd(_mm_load_sd(&a->d.x), &b->d.x), _mm_loadh_pd(_mm_load_sd(&a->d.y), &b->d.y),
+				 _mm_loadh_pd(_mm_load_sd(&a->d.z), &b->d.z) };
+		__m128d oo[3] = { _mm_loadh_pd(_mm_load_sd(&a->o.x), &b->o.x), _mm_loadh_pd(_mm_load_sd(&a->o.y), &b->o.y),
+				  _mm_loadh_pd(_mm_load_sd(&a->o.z), &b->o.z) };
+		__m128d m = _mm_max_pd(_mm_max_pd(_mm_andnot_pd(sign, d[0]), _mm_andnot_pd(sign, d[1])),
+				       _mm_andnot_pd(sign, d[2]));
+		/* e outside [-1000, 1000] (m < 2^-1000 or m >= 2^1001): unscaled, as ray_box_init */
+		__m128d clamp = _mm_or_pd(_mm_cmplt_pd(m, lo_e), _mm_cmpge_pd(m, hi_e));
+		__m128d ts = _mm_and_pd(m, expo);                                        /* 2^e */
+		__m128d sc = _mm_castsi128_pd(_mm_sub_epi64(two046, _mm_castpd_si128(ts))); /* 2^-e */
+		ts = _mm_or_pd(_mm_and_pd(clamp, one), _mm_andnot_pd(clamp, ts));
+		sc = _mm_or_pd(_mm_and_pd(clamp, one), _mm_andnot_pd(clamp, sc));
+		_mm_storeu_pd(&P->tscale[2 * h], ts);
+		for (int k = 0; k < 3; k++) {
+			__m128d dk = _mm_mul_pd(d[k], sc);
 			__m128d iv = _mm_div_pd(one, dk);
 			/* fabs(dk) > 1e-30 ? 1 / dk : copysign(1e30, dk) */
 			__m128d ok = _mm_cmpgt_pd(_mm_andnot_pd(sign, dk), tiny);
 			__m128d alt = _mm_or_pd(_mm_and_pd(sign, dk), big);
 			iv = _mm_or_pd(_mm_and_pd(ok, iv), _mm_andnot_pd(ok, alt));
-			_mm_storel_pi((__m64 *)(void *)&inv_near[k][h], _mm_cvtpd_ps(_mm_mul_pd(iv, wn)));
-			_mm_storel_pi((__m64 *)(void *)&inv_far[k][h], _mm_cvtpd_ps(_mm_mul_pd(iv, wf)));
+			in[k][h] = _mm_cvtpd_ps(_mm_mul_pd(iv, wn));
+			fa[k][h] = _mm_cvtpd_ps(_mm_mul_pd(iv, wf));
+			o[k][h] = _mm_cvtpd_ps(_mm_sub_pd(oo[k], c[k]));
 		}
+	}
+	for (int k = 0; k < 3; k++) {
+		P->o[k] = _mm_movelh_ps(o[k][0], o[k][1]);
+		P->inv_near[k] = _mm_movelh_ps(in[k][0], in[k][1]);
+		P->inv_far[k] = _mm_movelh_ps(fa[k][0], fa[k][1]);
+	}
 }
 
 /* The packet's side of the TRIANGLE PRE-TEST: one triangle against the
@@ -1468,13 +1502,8 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 	const struct bvh4 *nodes = g->bvh.nodes;
 	const uint32_t near[3] = { 12 * (oct & 1), 4 + 12 * (oct >> 1 & 1), 8 + 12 * (oct >> 2 & 1) };
 	const uint32_t far[3] = { 12 * (~oct & 1), 4 + 12 * (~oct >> 1 & 1), 8 + 12 * (~oct >> 2 & 1) };
-	float tmn[4], tmx[4];
-	for (int i = 0; i < 4; i++) {
-		tmn[i] = box_tmin(tr[i].tmin * P->tscale[i]);
-		tmx[i] = box_tmax(tr[i].tmax * P->tscale[i]);
-	}
-	const __m128 tmin4 = _mm_loadu_ps(tmn), inf4 = _mm_set1_ps(INFINITY);
-	__m128 tmax4 = _mm_loadu_ps(tmx);
+	const __m128 tmin4 = lanes_box_tmin(tr, P->tscale), inf4 = _mm_set1_ps(INFINITY);
+	__m128 tmax4 = lanes_box_tmax(tr, P->tscale);
 	struct {
 		__m128 t; /* each ray's entry distance, +inf where it misses */
 		uint32_t idx, n;
@@ -1507,11 +1536,7 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 				for (uint32_t k = 0; k < n; k++)
 					found[i] |= ref_test(A, g, group_ref(g, idx + k), &tr[i], &best[i], false);
 			}
-			for (; lanes; lanes &= lanes - 1) {
-				int i = __builtin_ctz(lanes);
-				tmx[i] = box_tmax(tr[i].tmax * P->tscale[i]);
-			}
-			tmax4 = _mm_loadu_ps(tmx);
+			tmax4 = lanes_box_tmax(tr, P->tscale); /* the tested lanes' changed */
 		} else {
 			const struct bvh4 *nd = &nodes[idx];
 			const float *b = (const float *)(const void *)nd; /* rows as in node4_hit */
@@ -1606,11 +1631,6 @@ static inline __attribute__((always_inline)) void bvh_hit4o(const struct accel *
 	const struct bvh4 *nodes = g->bvh.nodes;
 	const uint32_t near[3] = { 12 * (oct & 1), 4 + 12 * (oct >> 1 & 1), 8 + 12 * (oct >> 2 & 1) };
 	const uint32_t far[3] = { 12 * (~oct & 1), 4 + 12 * (~oct >> 1 & 1), 8 + 12 * (~oct >> 2 & 1) };
-	float tmn[4], tmx[4];
-	for (int i = 0; i < 4; i++) {
-		tmn[i] = box_tmin(tr[i].tmin * P->tscale[i]);
-		tmx[i] = box_tmax(tr[i].tmax * P->tscale[i]);
-	}
 	__m128 o[3], nlo[3], nhi[3], flo[3], fhi[3];
 	for (int k = 0; k < 3; k++) {
 		o[k] = _mm_shuffle_ps(P->o[k], P->o[k], 0); /* the shared origin */
@@ -1623,8 +1643,8 @@ static inline __attribute__((always_inline)) void bvh_hit4o(const struct accel *
 		flo[k] = _mm_min_ps(bmin, _mm_shuffle_ps(bmin, bmin, _MM_SHUFFLE(2, 3, 0, 1)));
 		fhi[k] = _mm_max_ps(bmax, _mm_shuffle_ps(bmax, bmax, _MM_SHUFFLE(2, 3, 0, 1)));
 	}
-	const __m128 tmin1 = _mm_set1_ps(lanes_min(_mm_loadu_ps(tmn)));
-	float tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), _mm_loadu_ps(tmx))); /* the greatest */
+	const __m128 tmin1 = _mm_set1_ps(lanes_min(lanes_box_tmin(tr, P->tscale)));
+	float tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), lanes_box_tmax(tr, P->tscale))); /* the greatest */
 	struct {
 		float t; /* the packet's least entry distance */
 		uint32_t idx, n;
@@ -1640,9 +1660,7 @@ static inline __attribute__((always_inline)) void bvh_hit4o(const struct accel *
 				leaf4_block(g, tr, best, found, &g->tblk[idx], n & ~LEAF_BLOCK, 15, &q, &q_ready);
 			else
 				leaf4(A, g, tr, best, found, idx, n, 15, &q, &q_ready);
-			for (int i = 0; i < 4; i++)
-				tmx[i] = box_tmax(tr[i].tmax * P->tscale[i]);
-			tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), _mm_loadu_ps(tmx)));
+			tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), lanes_box_tmax(tr, P->tscale)));
 		} else {
 			const struct bvh4 *nd = &nodes[idx];
 			const float *b = (const float *)(const void *)nd; /* rows as in node4_hit */
@@ -1709,30 +1727,30 @@ static void group_hit4(const struct accel *A, const struct group *g, struct trac
 	struct cand best[4];
 	bool found[4];
 	struct ray4x P;
-	float o[3][4], inv_near[3][4], inv_far[3][4];
 	for (int i = 0; i < 4; i++) {
 		cand_init(&best[i]);
 		found[i] = group_hit_unbounded(A, g, &tr[i], &best[i], false);
 	}
-	ray_box4(tr, g->center, o, inv_near, inv_far, P.tscale);
-	for (int k = 0; k < 3; k++) {
-		P.o[k] = _mm_loadu_ps(o[k]);
-		P.inv_near[k] = _mm_loadu_ps(inv_near[k]);
-		P.inv_far[k] = _mm_loadu_ps(inv_far[k]);
-	}
+	ray_box4(tr, g->center, &P);
 	/* one origin, the same floats in every lane (eye rays of a pinhole
 	 * camera): the whole-packet node test, which needs no rows per ray */
-	bool same_o = memcmp(o[0], o[0] + 1, 3 * sizeof(float)) == 0 &&
-		      memcmp(o[1], o[1] + 1, 3 * sizeof(float)) == 0 && memcmp(o[2], o[2] + 1, 3 * sizeof(float)) == 0;
-	if (same_o) {
+	__m128i same = _mm_set1_epi32(-1);
+	for (int k = 0; k < 3; k++) {
+		__m128i ok = _mm_castps_si128(P.o[k]);
+		same = _mm_and_si128(same, _mm_cmpeq_epi32(ok, _mm_shuffle_epi32(ok, 0)));
+	}
+	if (_mm_movemask_epi8(same) == 0xffff) {
 		group_hit4o(A, g, tr, best, found, &P, oct);
 	} else {
-		for (int k = 0; k < 3; k++)
-			for (int i = 0; i < 4; i++) {
-				P.lo[i][k] = _mm_set1_ps(o[k][i]);
-				P.lnear[i][k] = _mm_set1_ps(inv_near[k][i]);
-				P.lfar[i][k] = _mm_set1_ps(inv_far[k][i]);
-			}
+		for (int k = 0; k < 3; k++) {
+			__m128 a = P.o[k], b = P.inv_near[k], f = P.inv_far[k];
+			P.lo[0][k] = _mm_shuffle_ps(a, a, 0x00), P.lo[1][k] = _mm_shuffle_ps(a, a, 0x55);
+			P.lo[2][k] = _mm_shuffle_ps(a, a, 0xaa), P.lo[3][k] = _mm_shuffle_ps(a, a, 0xff);
+			P.lnear[0][k] = _mm_shuffle_ps(b, b, 0x00), P.lnear[1][k] = _mm_shuffle_ps(b, b, 0x55);
+			P.lnear[2][k] = _mm_shuffle_ps(b, b, 0xaa), P.lnear[3][k] = _mm_shuffle_ps(b, b, 0xff);
+			P.lfar[0][k] = _mm_shuffle_ps(f, f, 0x00), P.lfar[1][k] = _mm_shuffle_ps(f, f, 0x55);
+			P.lfar[2][k] = _mm_shuffle_ps(f, f, 0xaa), P.lfar[3][k] = _mm_shuffle_ps(f, f, 0xff);
+		}
 		switch (oct) { /* one copy of the loop per octant, as group_hit */
 		case 0: bvh_hit4(A, g, tr, best, found, &P, 0); break;
 		case 1: bvh_hit4(A, g, tr, best, found, &P, 1); break;
@@ -1768,12 +1786,7 @@ static inline __attribute__((always_inline)) void bvh_occluded4(const struct acc
 	const struct bvh4 *nodes = g->bvh.nodes;
 	const uint32_t near[3] = { 12 * (oct & 1), 4 + 12 * (oct >> 1 & 1), 8 + 12 * (oct >> 2 & 1) };
 	const uint32_t far[3] = { 12 * (~oct & 1), 4 + 12 * (~oct >> 1 & 1), 8 + 12 * (~oct >> 2 & 1) };
-	float tmn[4], tmx[4];
-	for (int i = 0; i < 4; i++) {
-		tmn[i] = box_tmin(tr[i].tmin * P->tscale[i]);
-		tmx[i] = box_tmax(tr[i].tmax * P->tscale[i]);
-	}
-	const __m128 tmin4 = _mm_loadu_ps(tmn), tmax4 = _mm_loadu_ps(tmx);
+	const __m128 tmin4 = lanes_box_tmin(tr, P->tscale), tmax4 = lanes_box_tmax(tr, P->tscale);
 	struct {
 		uint32_t idx, n;
 		unsigned lanes; /* the rays that met the subtree's box */
@@ -1869,13 +1882,7 @@ out:
 /* The four rays' box constants (struct ray4x) in group g's frame. */
 static void ray4x_init(struct ray4x *P, const struct trace tr[4], const struct group *g)
 {
-	float o[3][4], inv_near[3][4], inv_far[3][4];
-	ray_box4(tr, g->center, o, inv_near, inv_far, P->tscale);
-	for (int k = 0; k < 3; k++) {
-		P->o[k] = _mm_loadu_ps(o[k]);
-		P->inv_near[k] = _mm_loadu_ps(inv_near[k]);
-		P->inv_far[k] = _mm_loadu_ps(inv_far[k]);
-	}
+	ray_box4(tr, g->center, P);
 }
 
 /* accel_occluded4's packet query in g (g->bvh.n_nodes4, no big leaves) for
