@@ -132,24 +132,24 @@ static void mat_lerp(struct shader_mat *o, const struct shader_mat *a, const str
 	o->n = v3_len(n) > 0 ? n : a->n;
 }
 
-static void eval(const struct scene *s, uint32_t id, struct shader_point pt, int depth, struct shader_mat *o);
+static void eval(const struct scene *s, uint32_t id, const struct shader_point *pt, int depth, struct shader_mat *o);
 
 /* Evaluates a shader argument: the material, or the given default when absent. */
-static void eval_arg(const struct scene *s, uint32_t id, vec3 def, struct shader_point pt, int depth,
+static void eval_arg(const struct scene *s, uint32_t id, vec3 def, const struct shader_point *pt, int depth,
 		     struct shader_mat *o)
 {
 	if (id == SCENE_NONE || id >= s->n_materials)
-		matt(o, def, pt.n);
+		matt(o, def, pt->n);
 	else
 		eval(s, id, pt, depth + 1, o);
 }
 
 /* Evaluates the "material" argument of bumpy/noise/turb3d: absent = the owner without its shader. */
-static void eval_own(const struct scene *s, const struct scene_material *m, struct shader_point pt,
+static void eval_own(const struct scene *s, const struct scene_material *m, const struct shader_point *pt,
 		     int depth, struct shader_mat *o)
 {
 	if (m->shader.mat_a == SCENE_NONE || m->shader.mat_a >= s->n_materials)
-		base(m, pt.n, o);
+		base(m, pt->n, o);
 	else
 		eval(s, m->shader.mat_a, pt, depth + 1, o);
 }
@@ -193,44 +193,44 @@ static vec3 bump_normal(const struct scene_shader *sh, vec3 p, vec3 n)
 	return v3_finite(nn) && v3_len(nn) > 0 ? nn : n;
 }
 
-static void eval(const struct scene *s, uint32_t id, struct shader_point pt, int depth, struct shader_mat *o)
+static void eval(const struct scene *s, uint32_t id, const struct shader_point *pt, int depth, struct shader_mat *o)
 {
 	if (id == SCENE_NONE || id >= s->n_materials) {
-		base(scene_default_material(), pt.n, o);
+		base(scene_default_material(), pt->n, o);
 		return;
 	}
 	const struct scene_material *m = &s->materials[id];
 	const struct scene_shader *sh = &m->shader;
 	if (sh->kind == SHADER_NONE || depth >= LIM_SHADER_DEPTH) {
-		base(m, pt.n, o);
+		base(m, pt->n, o);
 		return;
 	}
 	switch (sh->kind) {
 	case SHADER_BRICKS:
-		if (shader_bricks_is_mortar(pt.u, pt.v, sh->size))
+		if (shader_bricks_is_mortar(pt->u, pt->v, sh->size))
 			eval_arg(s, sh->mat_a, v3(0.85, 0.85, 0.8), pt, depth, o);
 		else
 			eval_arg(s, sh->mat_b, v3(0.6, 0.25, 0.15), pt, depth, o);
 		return;
 	case SHADER_TILES:
-		if (shader_tiles_is_grout(pt.u, pt.v, sh->size, sh->tile_width, sh->grout_width))
+		if (shader_tiles_is_grout(pt->u, pt->v, sh->size, sh->tile_width, sh->grout_width))
 			eval_arg(s, sh->mat_b, v3(0.3, 0.3, 0.3), pt, depth, o);
 		else
 			eval_arg(s, sh->mat_a, v3(1, 1, 1), pt, depth, o);
 		return;
 	case SHADER_CHEQUERS:
-		if (shader_chequers_which(pt.u, pt.v, sh->size))
+		if (shader_chequers_which(pt->u, pt->v, sh->size))
 			eval_arg(s, sh->mat_b, v3(0, 0, 0), pt, depth, o);
 		else
 			eval_arg(s, sh->mat_a, v3(1, 1, 1), pt, depth, o);
 		return;
 	case SHADER_BUMPY:
 		eval_own(s, m, pt, depth, o);
-		o->n = bump_normal(sh, pt.mp, o->n);
+		o->n = bump_normal(sh, pt->mp, o->n);
 		return;
 	case SHADER_NOISE: {
 		eval_own(s, m, pt, depth, o);
-		double nv = noise_perlin(v3_scale(pt.mp, 1.0 / sh->size));
+		double nv = noise_perlin(v3_scale(pt->mp, 1.0 / sh->size));
 		vec3 f = v3_max(v3_add(sh->colour, v3(sh->variance * nv, sh->variance * nv, sh->variance * nv)),
 				v3(0, 0, 0));
 		o->diff_colour = v3_mul(o->diff_colour, f);
@@ -238,17 +238,17 @@ static void eval(const struct scene *s, uint32_t id, struct shader_point pt, int
 	}
 	case SHADER_FADES: {
 		if (!sh->fades_materials) {
-			base(m, pt.n, o);
-			o->diff_colour = shader_fades_colour(sh, pt.mp);
+			base(m, pt->n, o);
+			o->diff_colour = shader_fades_colour(sh, pt->mp);
 			return;
 		}
 		uint32_t i;
 		double f;
 		if (sh->n_fades == 0) {
-			base(m, pt.n, o);
+			base(m, pt->n, o);
 			return;
 		}
-		fades_locate(sh, pt.mp, &i, &f);
+		fades_locate(sh, pt->mp, &i, &f);
 		eval_arg(s, sh->fades[i].material, v3(1, 1, 1), pt, depth, o);
 		if (f > 0) {
 			struct shader_mat b;
@@ -259,13 +259,14 @@ static void eval(const struct scene *s, uint32_t id, struct shader_point pt, int
 		return;
 	}
 	case SHADER_TURB3D: {
-		vec3 d = noise_fbm_vec(v3_scale(pt.mp, 1.0 / sh->size), sh->terms);
-		pt.mp = v3_add(pt.mp, v3_scale(d, sh->depth));
-		eval_own(s, m, pt, depth, o);
+		vec3 d = noise_fbm_vec(v3_scale(pt->mp, 1.0 / sh->size), sh->terms);
+		struct shader_point q = *pt;
+		q.mp = v3_add(q.mp, v3_scale(d, sh->depth));
+		eval_own(s, m, &q, depth, o);
 		return;
 	}
 	default:
-		base(m, pt.n, o);
+		base(m, pt->n, o);
 		return;
 	}
 }
@@ -273,5 +274,5 @@ static void eval(const struct scene *s, uint32_t id, struct shader_point pt, int
 void shader_eval(const struct scene *s, uint32_t material, const struct shader_point *pt,
 		 struct shader_mat *out)
 {
-	eval(s, material, *pt, 0, out);
+	eval(s, material, pt, 0, out);
 }
