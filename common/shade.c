@@ -652,15 +652,16 @@ struct surf {
  * loads span the 8-byte stores that wrote it), 6% of the teapot's render. */
 static bool surf_prepare(const struct shade_ctx *c, const struct ray *r, const struct hit *hp, struct surf *sf)
 {
-	if (!v3_finite(hp->p))
+	vec3 p = v3_load_split(&hp->p), ng = v3_load_split(&hp->ng), n = v3_load_split(&hp->n);
+	if (!v3_finite(p))
 		return false;
-	sf->p = hp->p;
+	sf->p = p;
 	vec3 d = r->d;
 
 	/* face the viewer: the geometric normal decides the side, n follows it */
-	sf->entering = v3_dot(hp->ng, d) < 0;
-	sf->ng = sf->entering ? hp->ng : v3_neg(hp->ng);
-	vec3 n0 = sf->entering ? hp->n : v3_neg(hp->n);
+	sf->entering = v3_dot(ng, d) < 0;
+	sf->ng = sf->entering ? ng : v3_neg(ng);
+	vec3 n0 = sf->entering ? n : v3_neg(n);
 	struct shader_point pt;
 	if (surface_needed(c, hp->material)) {
 		struct hit h = *hp; /* need_surface's case: mp, u and v completed */
@@ -1128,8 +1129,14 @@ void shade_eye_hit4(const struct shade_ctx *c, const struct ray u[4], const stru
 		ok[k] = h[k] && surf_prepare(c, &u[k], h[k], &sf[k]);
 	struct shadow_pre pre[4];
 	shadow_packets(c, sf, ok, n, pre);
-	for (int k = 0; k < n; k++)
-		out[k] = ok[k] ? surf_shade(c, &u[k], &sf[k], 0, 1.0, seed[k], &pre[k]) : v3(0, 0, 0);
+	for (int k = 0; k < n; k++) {
+		if (!ok[k]) {
+			out[k] = v3(0, 0, 0);
+			continue;
+		}
+		vec3 v = surf_shade(c, &u[k], &sf[k], 0, 1.0, seed[k], &pre[k]);
+		out[k] = v3_load_split(&v); /* returned in memory: read as it was written */
+	}
 }
 
 vec3 shade_trace(const struct shade_ctx *c, const struct ray *r, uint64_t seed)

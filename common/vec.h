@@ -24,6 +24,23 @@ static inline vec3 v3(double x, double y, double z)
 	vec3 r = { x, y, z };
 	return r;
 }
+
+/*
+ * *p read one component at a time (8-byte loads), for a vector that was
+ * just stored that way (a hit accel has filled in): gcc would otherwise
+ * read x and y with one 16-byte load, which cannot take its data from two
+ * 8-byte stores still in the store buffer and waits until they reach the
+ * cache (a store-forwarding stall, about a dozen cycles each on x86). The
+ * empty asm keeps the three loads apart and costs nothing else.
+ */
+static inline vec3 v3_load_split(const vec3 *p)
+{
+	double x = p->x, y = p->y, z = p->z;
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__)) && defined(__SSE2__)
+	__asm__("" : "+x"(x), "+x"(y), "+x"(z));
+#endif
+	return v3(x, y, z);
+}
 static inline vec3 v3_add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
 static inline vec3 v3_sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
 static inline vec3 v3_mul(vec3 a, vec3 b) { return v3(a.x * b.x, a.y * b.y, a.z * b.z); }
