@@ -107,12 +107,27 @@ static uint32_t *light_hint(const struct shade_ctx *c, uint32_t i)
  * shadow rays toward the first SHADE_PRE_TLIGHTS point lights
  * (accel_intersect4); transmittance() goes on from there. */
 #define SHADE_PRE_TLIGHTS 8
+/* The way from a hit point p (shading normal n) to a point light lp, as
+ * direct() finds it: dist = |lp - p|; when dist > 0, the unit direction
+ * ldir and ndotl = n . ldir; lit: dist > 0 and !(ndotl <= 0), the light
+ * shines on the point's side (light_way_at). */
+struct light_way {
+	vec3 ldir;
+	double dist, ndotl;
+	bool lit;
+};
+#define SHADE_PRE_WAYS 4
 struct shadow_pre {
 	uint32_t known; /* bit i: light i's shadow ray from this hit was traced */
 	uint32_t occ;   /* bit i: ... and it was blocked */
 	uint32_t tknown; /* transparent scenes: bit i: first[i] (or a miss) is known */
 	uint32_t thit;   /* bit i: ... and it is a hit */
 	struct hit *first; /* [SHADE_PRE_TLIGHTS]: the hits (NULL when tknown is 0) */
+	/* LIGHT WAYS: bit i (a point light, i < SHADE_PRE_WAYS): way[i] is
+	 * direct()'s way from this hit to light i, made once for the shadow
+	 * packet and the shading both */
+	uint32_t wknown;
+	struct light_way way[SHADE_PRE_WAYS];
 };
 
 /* Two unit vectors perpendicular to unit axis a and to each other. */
@@ -131,6 +146,21 @@ static inline double max3(double a, double b, double c)
 }
 static double maxc(vec3 a) { return max3(a.x, a.y, a.z); }
 static double maxabs(vec3 a) { return max3(fabs(a.x), fabs(a.y), fabs(a.z)); }
+
+/* struct light_way from p (normal n) to lp: direct()'s arithmetic. */
+static inline struct light_way light_way_at(vec3 p, vec3 n, vec3 lp)
+{
+	struct light_way w;
+	vec3 to = v3_sub(lp, p);
+	w.dist = v3_len(to);
+	w.lit = false;
+	if (!(w.dist > 0))
+		return w;
+	w.ldir = v3_scale(to, 1 / w.dist);
+	w.ndotl = v3_dot(n, w.ldir);
+	w.lit = !(w.ndotl <= 0);
+	return w;
+}
 
 /*
  * TRANSPARENT BOXES. In a scene with transparent materials a shadow ray
@@ -571,14 +601,13 @@ static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx 
 		vec3 sum = v3(0, 0, 0);
 		for (int k = 0; k < n_samples; k++) {
 			vec3 lp = point ? l->position : light_point(L, k, n_samples, r1, r2);
-			vec3 to = v3_sub(lp, p);
-			double dist = v3_len(to);
-			if (!(dist > 0))
+			struct light_way w = point && pre && i < SHADE_PRE_WAYS && (pre->wknown >> i & 1)
+						     ? pre->way[i] /* LIGHT WAYS: made for the shadow packet */
+						     : light_way_at(p, n, lp);
+			if (!w.lit)
 				continue;
-			vec3 ldir = v3_scale(to, 1 / dist);
-			double ndotl = v3_dot(n, ldir);
-			if (ndotl <= 0)
-				continue;
+			vec3 ldir = w.ldir;
+			double dist = w.dist, ndotl = w.ndotl;
 			vec3 in = l->colour;
 			if (l->fall_off != 0)
 				in = v3_scale(in, 1 / xm_pow(dist, l->fall_off));
@@ -839,24 +868,26 @@ static unsigned octant(vec3 d)
 	return (unsigned)!!signbit(d.x) | (unsigned)!!signbit(d.y) << 1 | (unsigned)!!signbit(d.z) << 2;
 }
 
-/* The shadow rays r[0 .. m-1] toward point lp from the prepared hits
- * (ok[k]) that direct() traces, hit who[j] for ray j; returns m. */
-static inline int block_rays(const struct surf sf[4], const bool ok[4], int n, vec3 lp,
-			     struct ray r[4], int who[4])
+/* The shadow rays r[0 .. m-1] toward point light i (at lp) from the
+ * prepared hits (ok[k]) that direct() traces, hit who[j] for ray j;
+ * returns m. The ways to the light are pre[k]'s when known, and are made
+ * here (and kept in pre for direct()) when i < SHADE_PRE_WAYS. */
+static inline int block_rays(const struct surf sf[4], const bool ok[4], int n, uint32_t i, vec3 lp,
+			     struct shadow_pre pre[4], struct ray r[4], int who[4])
 {
 	int m = 0;
 	for (int k = 0; k < n; k++) {
 		if (!ok[k])
 			continue;
 		vec3 p = sf[k].p;
-		vec3 to = v3_sub(lp, p); /* direct()'s arithmetic */
-		double dist = v3_len(to);
-		if (!(dist > 0))
+		struct light_way w = light_way_at(p, sf[k].n, lp); /* direct()'s arithmetic */
+		if (i < SHADE_PRE_WAYS) {
+			pre[k].way[i] = w;
+			pre[k].wknown |= 1u << i;
+		}
+		if (!w.lit)
 			continue;
-		vec3 ldir = v3_scale(to, 1 / dist);
-		if (v3_dot(sf[k].n, ldir) <= 0)
-			continue;
-		vec3 o = offset(p, sf[k].ng, ldir);
+		vec3 o = offset(p, sf[k].ng, w.ldir);
 		r[m] = (struct ray){ o, v3_sub(lp, o), 0, 1 }; /* transmittance()'s */
 		who[m++] = k;
 	}
@@ -869,7 +900,7 @@ static inline int block_rays(const struct surf sf[4], const bool ok[4], int n, v
 static uint32_t packet_lights(const struct shade_ctx *c, struct shadow_pre pre[4])
 {
 	for (int k = 0; k < 4; k++)
-		pre[k].known = pre[k].occ = pre[k].tknown = pre[k].thit = 0;
+		pre[k].known = pre[k].occ = pre[k].tknown = pre[k].thit = pre[k].wknown = 0;
 	if (c->s->image.no_shadows)
 		return 0;
 	return c->n_lights < SHADE_PRE_LIGHTS ? c->n_lights : SHADE_PRE_LIGHTS;
@@ -910,7 +941,7 @@ static void shadow_packets(const struct shade_ctx *c, const struct surf sf[4], c
 		const struct scene_light *l = c->lights[i].l;
 		struct ray r[4];
 		int who[4];
-		int m = block_rays(sf, ok, n, l->position, r, who);
+		int m = block_rays(sf, ok, n, i, l->position, pre, r, who);
 		if (!m)
 			continue;
 		occlusion_packet(c, i, r, who, m, pre);
@@ -936,7 +967,7 @@ static void shadow_packets_transparent(const struct shade_ctx *c, const struct s
 		const struct scene_light *l = c->lights[i].l;
 		struct ray r[4];
 		int who[4];
-		int m = block_rays(sf, ok, n, l->position, r, who);
+		int m = block_rays(sf, ok, n, i, l->position, pre, r, who);
 		bool cross[4];
 		int n_cross = 0;
 		for (int j = 0; j < m; j++)
