@@ -7,8 +7,7 @@
  * last-blocker hint, and the accel_ functions one file calls in the other.
  * Private to those two files, like accel_int.h (nothing else includes it);
  * the design is described at the top of accel.c. The pieces are static
- * inline: the traversal loops inline them, so each file has its own copy
- * and the hot paths are what they were when all this was one file.
+ * inline, each file with its own copy: the traversal loops inline them.
  */
 #ifndef PORTRAY_ACCEL_TRACE_H
 #define PORTRAY_ACCEL_TRACE_H
