@@ -7,7 +7,7 @@
  * deeper graphs).
  *
  * Owner of the geometry: common/geom*.c, common/bvh.c, common/csg.c,
- * common/accel.c. Primitive mappings and normals: the comment at the top of
+ * common/accel*.c. Primitive mappings and normals: the comment at the top of
  * common/geom.c; the epsilon strategy: common/accel.c.
  * The accel keeps a pointer to the scene; the scene must outlive it.
  */
@@ -42,7 +42,7 @@ struct hit {
 			      only after accel_hit_surface */
 	uint32_t material; /* resolved material index, SCENE_NONE = default material */
 	uint32_t object;   /* object index of the leaf object hit */
-	/* private to accel.c: how accel_hit_surface completes u, v and mp
+	/* private to accel*.c: how accel_hit_surface completes u, v and mp
 	 * (surf_fn == NULL: they are complete). A hit made by hand (a test's
 	 * mock accel) must set surf_fn = NULL if shading may ask for them. */
 	void (*surf_fn)(const struct accel *a, struct hit *h);
@@ -91,8 +91,8 @@ bool accel_bounds(const struct accel *a, vec3 *lo, vec3 *hi);
 bool accel_intersect(const struct accel *a, const struct ray *r, struct hit *h);
 /* The closest hits of four rays at once: hit[i] and h[i] are exactly what
  * accel_intersect(a, &r[i], &h[i]) gives, bit for bit (ties are canonical,
- * see accel.c). Faster when the rays are neighbours that visit the same
- * nodes, as the eye rays of a 2x2 block of pixels do. Thread-safe. */
+ * see accel_trace.h). Faster when the rays are neighbours that visit the
+ * same nodes, as the eye rays of a 2x2 block of pixels do. Thread-safe. */
 void accel_intersect4(const struct accel *a, const struct ray r[4], struct hit h[4], bool hit[4]);
 /* Completes h->u, h->v and h->mp of a hit that accel_intersect or
  * accel_intersect_brute returned with the same accel (the values are those

@@ -328,7 +328,7 @@ static int push_triangle(struct refbuf *rb, uint32_t ref, vec3 a, vec3 b, vec3 c
  * cylinder: a ray meeting two slices tests it twice and finds the same t
  * (geom_intersect reports the first root after tmin, if it is below tmax,
  * whatever tmax is), which does not beat itself (CANONICAL TIES in
- * accel.c): the hits are the one box's, bit for bit.
+ * accel_trace.h): the hits are the one box's, bit for bit.
  */
 #define CYL_SLICES_MAX 8
 #define CYL_SPLIT_GAIN 0.9

@@ -1,7 +1,8 @@
 /*
- * accel_int.h - the acceleration structure's private data, shared by
- * accel.c (ray queries) and accel_build.c (building). Nothing outside those
- * two files includes it; the public interface is accel.h. The design (groups,
+ * accel_int.h - the acceleration structure's private data, shared by the
+ * ray queries (accel.c, accel_packet.c, accel_trace.h) and accel_build.c
+ * (building). Nothing outside those files includes it; the public interface
+ * is accel.h. The design (groups,
  * references, instances, unbounded lists) is described at the top of accel.c.
  */
 #ifndef PORTRAY_ACCEL_INT_H
@@ -19,7 +20,7 @@ enum { REF_SPHERE = 0, REF_TRI = 1, REF_XPRIM = 2, REF_INST = 3 };
 #define REF_IDX(r) ((r) & 0x3fffffffu)
 /* references per group: 30 bits of index */
 #define ACCEL_MAX_REFS (1u << 30)
-/* an instance's tie key is REF_MAKE(REF_INST, its scene record) (accel.c) */
+/* an instance's tie key is REF_MAKE(REF_INST, its scene record) (accel_trace.h) */
 _Static_assert(LIM_OBJECTS <= ACCEL_MAX_REFS, "object and record indices fit a reference's index bits");
 /* primitives per BVH leaf */
 #define ACCEL_MAX_LEAF 4
@@ -40,7 +41,7 @@ struct gsphere {
 	vec3 c;
 	double r2;
 	uint32_t obj; /* object index, | GSPH_FRAME when its pole/equator are not the default */
-	uint32_t mat; /* the object's material (finish reads no scene object) */
+	uint32_t mat; /* the object's material (accel_finish reads no scene object) */
 };
 /* gsphere.obj flag (object indices are below LIM_OBJECTS = 2^26) */
 #define GSPH_FRAME 0x80000000u
@@ -51,11 +52,12 @@ struct gmesh {
 	const vec3 *v;      /* vertices in the group's space */
 	const vec3 *n;      /* normals in the group's space, or NULL */
 	const vec3 *ov;     /* vertices in the object's own space (for mp, uv) */
-	const vec3 *fn;     /* a plain triangle's unit face normal (from v, as finish
-			       computes it), or NULL (raw meshes: computed per hit) */
+	const vec3 *fn;     /* a plain triangle's unit face normal (from v, as
+			       accel_finish computes it), or NULL (raw meshes:
+			       computed per hit) */
 	const uint32_t *ix; /* 3 per triangle */
 	uint32_t obj;
-	uint32_t mat;       /* the object's material (finish reads no scene object) */
+	uint32_t mat;       /* the object's material (accel_finish reads no scene object) */
 };
 
 /* hit.surf_kind: what surface_complete completes */
@@ -76,7 +78,7 @@ struct xprim {
  * the inverse transform rounded to float (inst_inverse), which the build
  * and every ray compute alike. Records are in the order of their object
  * indices, so tie keys made from rec order instances as object indices
- * did (CANONICAL TIES in accel.c). */
+ * did (CANONICAL TIES in accel_trace.h). */
 struct ginst {
 	uint32_t rec;
 };
@@ -86,7 +88,7 @@ struct ginst {
  * triangles gets, at build time, a block of its triangles' vertices in
  * float, one triangle per SIMD lane (struct-of-arrays), so that one ray is
  * tested against the whole leaf in one float pass (the TRIANGLE PRE-TEST,
- * accel.c) and the packets read the floats without gathering them. The
+ * accel_trace.h) and the packets read the floats without gathering them. The
  * node's child then has n = count | LEAF_BLOCK and idx = the block's offset
  * in group.tblk. A block of n triangles is BLK_ROWS rows of n words: row
  * 3j + k holds component k (x, y, z) of vertex j (a, b, c) of each
@@ -139,7 +141,7 @@ struct group {
 	const struct geom_obj *plane1; /* the only unbounded reference when it is an
 					  untransformed plane (tested inline), else NULL */
 	bool big_leaf;  /* some leaf has more than ACCEL_LEAF_CHUNK references:
-			   no packets through this group (accel.c) */
+			   no packets through this group (accel_packet.c) */
 	vec3 center;    /* node bounds are relative to this point */
 	size_t bytes;
 };

@@ -1,7 +1,8 @@
 /*
  * bvh.h - a binned-SAH bounding volume hierarchy over boxes, flattened into
  * an array of 32-byte nodes. The builder knows nothing of primitives: it
- * orders item indices; traversal lives with the primitives (accel.c).
+ * orders item indices; traversal lives with the primitives (accel.c,
+ * accel_packet.c).
  */
 #ifndef PORTRAY_BVH_H
 #define PORTRAY_BVH_H

@@ -1,7 +1,7 @@
 /*
- * geom.h - internal to the geometry modules (geom.c, bvh.c, csg.c, accel.c):
+ * geom.h - internal to the geometry modules (geom.c, bvh.c, csg.c, accel*.c):
  * per-object precomputed shape data and the object-space primitive kernels.
- * Nothing outside common/geom*.c, bvh.c, csg.c and accel.c includes this.
+ * Nothing outside common/geom*.c, bvh.c, csg.c and accel*.c includes this.
  *
  * Every kernel works in the object's own space on an unnormalised ray
  * o + t d: t is invariant under affine maps, so a hit distance found in

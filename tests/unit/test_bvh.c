@@ -772,7 +772,7 @@ static void big_leaf(void)
 }
 
 /*
- * The packets' triangle pre-test (TRIANGLE PRE-TEST in accel.c) at its
+ * The packets' triangle pre-test (TRIANGLE PRE-TEST in accel_trace.h) at its
  * margins: a grid of triangles (near the origin, and 1000 units away,
  * where floats are coarse) and packets of four rays from one origin aimed
  * at the grid's shared vertices and edge midpoints, exactly and off by
@@ -834,7 +834,7 @@ static void tri_margins(void)
 }
 
 /*
- * The packets' box set-up (ray_box4 in accel.c) lane by lane: four rays
+ * The packets' box set-up (ray_box4 in accel_packet.c) lane by lane: four rays
  * from one origin whose directions differ in scale (2^-500 to 2^60, and
  * beyond the +-1000 exponent clamp), with components at and around the
  * 1e-30 cut-off below which an inverse becomes +-1e30, zero components,

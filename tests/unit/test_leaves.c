@@ -1,6 +1,6 @@
 /*
  * test_leaves.c - the triangle pre-test on leaf blocks (LEAF BLOCKS in
- * accel_int.h, TRIANGLE PRE-TEST in accel.c) never culls a hit. Scenes of
+ * accel_int.h, TRIANGLE PRE-TEST in accel_trace.h) never culls a hit. Scenes of
  * small patches of one to four triangles sharing vertices and edges (each
  * patch far from the others, so its triangles make one leaf of that many),
  * plus sliver triangles (split into several references: leaves that name
