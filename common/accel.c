@@ -714,7 +714,7 @@ static inline __attribute__((always_inline)) bool group_occluded_t(const struct 
 	for (uint32_t k = 0; k < g->n_unb; k++) {
 		if (cancel_poll_every(k)) /* CANCELLATION, as accel_unb_hit */
 			return false;
-		if (ref_occludes(A, g, g->unb[k], r)) {
+		if (unb_occludes(A, g, k, r)) {
 			*who = g->unb[k];
 			return true;
 		}

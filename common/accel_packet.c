@@ -654,7 +654,7 @@ static void group_occluded4(const struct accel *A, const struct group *g, struct
 		for (uint32_t k = 0; k < g->n_unb && !blocked; k++) {
 			if (cancel_poll_every(k)) /* CANCELLATION, as accel_unb_hit */
 				break;
-			if (ref_occludes(A, g, g->unb[k], &tr[i])) {
+			if (unb_occludes(A, g, k, &tr[i])) {
 				blocked = true;
 				*hint = g->unb[k];
 			}

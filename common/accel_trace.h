@@ -295,6 +295,19 @@ static inline bool group_hit_unbounded(const struct accel *A, const struct group
 	return g->n_unb ? accel_unb_hit(A, g, r, best, brute) : false;
 }
 
+/* ref_occludes of g's unbounded reference k; the one ground plane
+ * (g->plane1) tested inline, as group_hit_unbounded tests it (geom_intersect's
+ * plane case, the same arithmetic). */
+static inline bool unb_occludes(const struct accel *A, const struct group *g, uint32_t k, struct trace *r)
+{
+	if (g->plane1) {
+		double t;
+		const struct geom_obj *go = g->plane1;
+		return geom_plane_t(go->u.pl.pos, go->u.pl.n, r->o, r->d, &t) && t > r->tmin && t < r->tmax;
+	}
+	return ref_occludes(A, g, g->unb[k], r);
+}
+
 /* Whether ref names a reference of g (kind and index in range): a hint
  * that does may be tested, whatever accel it came from. */
 static inline bool ref_valid(const struct group *g, uint32_t ref)
