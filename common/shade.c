@@ -606,6 +606,11 @@ static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx 
 						     : light_way_at(p, n, lp);
 			if (!w.lit)
 				continue;
+			/* SHADOW PACKETS: a known answer; a blocked ray adds nothing,
+			 * so its term (and highlight) are never made */
+			bool known = shadows && !l->no_shadows && pre && i < SHADE_PRE_LIGHTS && (pre->known >> i & 1);
+			if (known && (pre->occ >> i & 1))
+				continue;
 			vec3 ldir = w.ldir;
 			double dist = w.dist, ndotl = w.ndotl;
 			vec3 in = l->colour;
@@ -626,16 +631,11 @@ static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx 
 			vec3 term = v3_mul(in, v3_add(v3_scale(kcd, ndotl), v3_scale(kcs, hl)));
 			if (maxabs(term) * weight < cut * n_samples)
 				continue;
-			if (shadows && !l->no_shadows) {
-				if (pre && i < SHADE_PRE_LIGHTS && (pre->known >> i & 1)) { /* SHADOW PACKETS */
-					if (pre->occ >> i & 1)
-						continue;
-				} else {
-					vec3 t = transmittance(c, offset(p, ng, ldir), lp, i, pre);
-					if (maxc(t) <= 0)
-						continue;
-					term = v3_mul(term, t);
-				}
+			if (shadows && !l->no_shadows && !known) {
+				vec3 t = transmittance(c, offset(p, ng, ldir), lp, i, pre);
+				if (maxc(t) <= 0)
+					continue;
+				term = v3_mul(term, t);
 			}
 			sum = v3_add(sum, term);
 		}
