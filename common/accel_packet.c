@@ -27,9 +27,11 @@
  * children at once, bvh_hit4 tests each child against four rays at once.
  * Neighbouring camera rays visit nearly the same nodes, so the packet
  * shares the node loads, the ordering and the stack among them. The box
- * arithmetic is bvh_hit's (the same constants, from ray_box_init in
- * accel.c), so a lane's box test passes exactly when bvh_hit's would with
- * that ray's tmax.
+ * arithmetic is bvh_hit's, but for the inverses, which ray_box4 takes in
+ * float: a lane's box test may pass where bvh_hit's would not, or fail at
+ * a box bvh_hit's passes without a hit in it, never at one holding the
+ * ray's hit (BOX TESTS, accel_int.h), and CANONICAL TIES make the hit the
+ * same.
  */
 struct ray4x {
 	__m128 o[3], inv_near[3], inv_far[3];
@@ -78,25 +80,30 @@ static inline __m128 lanes_box_tmax(const struct trace tr[4], const double tscal
 }
 
 /*
- * ray_box_init for four rays at once, into P's rows (lane i: ray i): the
- * same operations two rays at a time, so the same floats bit for bit
- * (divpd and mulpd round as divsd and mulsd do, cvtpd2ps as cvtsd2ss, and
- * maxpd picks what the scalar comparisons pick for finite directions). The
- * scale's power of two comes from the exponent bits: 2^e is m's exponent
- * field alone and 2^-e has the field 2046 - E. Everything stays in
- * registers: building the pairs through arrays on the stack (8-byte
- * stores read back by 16-byte loads) stalled store forwarding and made
- * the set-up a tenth of tetra_s4's render.
+ * ray_box_init for four rays at once, into P's rows (lane i: ray i). The
+ * origins, the scale and the scaled directions are ray_box_init's, two
+ * rays at a time (mulpd and subpd round as mulsd and subsd do, cvtpd2ps
+ * as cvtsd2ss, and maxpd picks what the scalar comparisons pick for
+ * finite directions); the scale's power of two comes from the exponent
+ * bits: 2^e is m's exponent field alone and 2^-e has the field 2046 - E.
+ * The inverses are taken in float, four at a time (one divps where
+ * ray_box_init makes three divisions a ray): the scaled direction rounded
+ * to float, its inverse and the widening's product each add a rounding
+ * (2^-24) where ray_box_init's double path has one, two more in all,
+ * which BOX_WIDEN covers with room (accel_int.h: the budget is 2^-20, the
+ * errors about 2^-21 with these). The +-1e30 rule is the same, tested on
+ * the float. Everything stays in registers: building the pairs through
+ * arrays on the stack (8-byte stores read back by 16-byte loads) stalled
+ * store forwarding and made the set-up a tenth of tetra_s4's render.
  */
 static void ray_box4(const struct trace tr[4], vec3 center, struct ray4x *P)
 {
-	const __m128d one = _mm_set1_pd(1.0), tiny = _mm_set1_pd(1e-30), big = _mm_set1_pd(1e30);
-	const __m128d sign = _mm_set1_pd(-0.0), wn = _mm_set1_pd(1 - BOX_WIDEN), wf = _mm_set1_pd(1 + BOX_WIDEN);
+	const __m128d one = _mm_set1_pd(1.0), sign = _mm_set1_pd(-0.0);
 	const __m128d expo = _mm_castsi128_pd(_mm_set1_epi64x(0x7ff0000000000000LL));
 	const __m128i two046 = _mm_set1_epi64x(0x7fe0000000000000LL);
 	const __m128d lo_e = _mm_set1_pd(0x1p-1000), hi_e = _mm_set1_pd(0x1p1001);
 	const __m128d c[3] = { _mm_set1_pd(center.x), _mm_set1_pd(center.y), _mm_set1_pd(center.z) };
-	__m128 o[3][2], in[3][2], fa[3][2];
+	__m128 o[3][2], dks[3][2];
 	for (int h = 0; h < 2; h++) {
 		const struct trace *a = &tr[2 * h], *b = &tr[2 * h + 1];
 		/* lane pairs loaded 8 bytes at a time: the rays were just stored that way */
@@ -114,21 +121,22 @@ static void ray_box4(const struct trace tr[4], vec3 center, struct ray4x *P)
 		sc = _mm_or_pd(_mm_and_pd(clamp, one), _mm_andnot_pd(clamp, sc));
 		_mm_storeu_pd(&P->tscale[2 * h], ts);
 		for (int k = 0; k < 3; k++) {
-			__m128d dk = _mm_mul_pd(d[k], sc);
-			__m128d iv = _mm_div_pd(one, dk);
-			/* fabs(dk) > 1e-30 ? 1 / dk : copysign(1e30, dk) */
-			__m128d ok = _mm_cmpgt_pd(_mm_andnot_pd(sign, dk), tiny);
-			__m128d alt = _mm_or_pd(_mm_and_pd(sign, dk), big);
-			iv = _mm_or_pd(_mm_and_pd(ok, iv), _mm_andnot_pd(ok, alt));
-			in[k][h] = _mm_cvtpd_ps(_mm_mul_pd(iv, wn));
-			fa[k][h] = _mm_cvtpd_ps(_mm_mul_pd(iv, wf));
+			dks[k][h] = _mm_cvtpd_ps(_mm_mul_pd(d[k], sc));
 			o[k][h] = _mm_cvtpd_ps(_mm_sub_pd(oo[k], c[k]));
 		}
 	}
+	const __m128 onef = _mm_set1_ps(1.0f), tinyf = _mm_set1_ps(1e-30f), bigf = _mm_set1_ps(1e30f);
+	const __m128 signf = _mm_set1_ps(-0.0f), wnf = _mm_set1_ps(1 - BOX_WIDEN), wff = _mm_set1_ps(1 + BOX_WIDEN);
 	for (int k = 0; k < 3; k++) {
+		__m128 dk = _mm_movelh_ps(dks[k][0], dks[k][1]);
+		__m128 iv = _mm_div_ps(onef, dk);
+		/* fabsf(dk) > 1e-30 ? 1 / dk : copysignf(1e30, dk) */
+		__m128 ok = _mm_cmpgt_ps(_mm_andnot_ps(signf, dk), tinyf);
+		__m128 alt = _mm_or_ps(_mm_and_ps(signf, dk), bigf);
+		iv = _mm_or_ps(_mm_and_ps(ok, iv), _mm_andnot_ps(ok, alt));
 		P->o[k] = _mm_movelh_ps(o[k][0], o[k][1]);
-		P->inv_near[k] = _mm_movelh_ps(in[k][0], in[k][1]);
-		P->inv_far[k] = _mm_movelh_ps(fa[k][0], fa[k][1]);
+		P->inv_near[k] = _mm_mul_ps(iv, wnf);
+		P->inv_far[k] = _mm_mul_ps(iv, wff);
 	}
 }
 
