@@ -50,6 +50,7 @@ struct shade_light {
  * at most this many, one per material, the last one taking the rest. */
 #define SHADE_TBOXES 8
 
+#define SHADE_PLAIN 64
 struct shade_ctx {
 	const struct scene *s;
 	const struct accel *a;
@@ -57,6 +58,11 @@ struct shade_ctx {
 	uint32_t n_lights;
 	double total_samples; /* light samples per shading point, all lights (>= 1) */
 	bool any_transparent; /* some material has transparency > 0 */
+	/* PLAIN MATERIALS: shader_eval's result (but n) for each of the first
+	 * SHADE_PLAIN materials without a shader (bit i of plain_ok) and for the
+	 * default material, made once: shading points at them */
+	uint64_t plain_ok;
+	struct shader_mat plain[SHADE_PLAIN], plain_default;
 	/* TRANSPARENT BOXES: when tbox_all, every surface whose material may be
 	 * transparent lies inside one of tbox[0 .. n_tbox-1] */
 	bool tbox_all;
@@ -379,6 +385,13 @@ int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx
 	for (uint32_t i = 0; i < s->n_materials; i++)
 		if (s->materials[i].transparency > 0)
 			c->any_transparent = true;
+	const struct shader_point origin = { v3(0, 0, 0), 0, 0, v3(0, 0, 1) }; /* read for n alone */
+	for (uint32_t i = 0; i < s->n_materials && i < SHADE_PLAIN; i++)
+		if (s->materials[i].shader.kind == SHADER_NONE) {
+			shader_eval(s, i, &origin, &c->plain[i]);
+			c->plain_ok |= 1ull << i;
+		}
+	shader_eval(s, SCENE_NONE, &origin, &c->plain_default);
 	tbox_boxes(c);
 	*out = c;
 	return 0;
@@ -670,9 +683,19 @@ struct surf {
 	bool entering;       /* the ray meets the geometric normal's front */
 	vec3 ng;             /* geometric normal facing the viewer */
 	vec3 n;              /* shading normal (the shader's) */
-	struct shader_mat m;
+	const struct shader_mat *m; /* the material there: own, or the context's (PLAIN MATERIALS; its n unused) */
+	struct shader_mat own;
 	double td;           /* transparency clamped to [0, 1] */
 };
+
+/* The context's evaluation of a material without a shader (PLAIN
+ * MATERIALS), or NULL when shader_eval must evaluate it at the point. */
+static inline const struct shader_mat *plain_mat(const struct shade_ctx *c, uint32_t material)
+{
+	if (material >= c->s->n_materials) /* SCENE_NONE too: the default material */
+		return &c->plain_default;
+	return material < SHADE_PLAIN && (c->plain_ok >> material & 1) ? &c->plain[material] : NULL;
+}
 
 /* The first half of trace_hit: false when the hit cannot be shaded (black).
  * The hit is read in place, field by field, and copied only when a shader
@@ -691,17 +714,24 @@ static bool surf_prepare(const struct shade_ctx *c, const struct ray *r, const s
 	sf->entering = v3_dot(ng, d) < 0;
 	sf->ng = sf->entering ? ng : v3_neg(ng);
 	vec3 n0 = sf->entering ? n : v3_neg(n);
-	struct shader_point pt;
-	if (surface_needed(c, hp->material)) {
-		struct hit h = *hp; /* need_surface's case: mp, u and v completed */
-		accel_hit_surface(c->a, &h);
-		pt = (struct shader_point){ h.mp, h.u, h.v, n0 };
+	const struct shader_mat *pm = plain_mat(c, hp->material);
+	if (pm) { /* shader_eval's result but n, which it would set to n0 */
+		sf->m = pm;
+		sf->n = n0;
 	} else {
-		pt = (struct shader_point){ v3(0, 0, 0), 0, 0, n0 }; /* a plain material reads n alone */
+		struct shader_point pt;
+		if (surface_needed(c, hp->material)) {
+			struct hit h = *hp; /* need_surface's case: mp, u and v completed */
+			accel_hit_surface(c->a, &h);
+			pt = (struct shader_point){ h.mp, h.u, h.v, n0 };
+		} else {
+			pt = (struct shader_point){ v3(0, 0, 0), 0, 0, n0 }; /* a plain material reads n alone */
+		}
+		shader_eval(c->s, hp->material, &pt, &sf->own);
+		sf->m = &sf->own;
+		sf->n = sf->own.n;
 	}
-	shader_eval(c->s, hp->material, &pt, &sf->m);
-	sf->n = sf->m.n;
-	double tr = sf->m.transparency;
+	double tr = sf->m->transparency;
 	sf->td = tr < 0 ? 0 : tr > 1 ? 1 : tr;
 	return true;
 }
@@ -727,7 +757,7 @@ static vec3 trace_hit(const struct shade_ctx *c, const struct ray *r, const stru
 static inline bool reflect_ray(const struct shade_ctx *c, const struct ray *r, const struct surf *sf,
 			       double weight, struct ray *out, double *w, vec3 *k)
 {
-	const struct shader_mat *m = &sf->m;
+	const struct shader_mat *m = sf->m;
 	if (c->s->image.no_reflections || !(m->reflection > 0))
 		return false;
 	*k = v3_scale(m->spec_colour, m->reflection);
@@ -747,7 +777,7 @@ static inline bool reflect_ray(const struct shade_ctx *c, const struct ray *r, c
 static inline bool refract_ray(const struct shade_ctx *c, const struct ray *r, const struct surf *sf,
 			       double weight, struct ray *out, double *w, vec3 *k)
 {
-	const struct shader_mat *m = &sf->m;
+	const struct shader_mat *m = sf->m;
 	double td = sf->td;
 	if (!(td > 0))
 		return false;
@@ -781,7 +811,7 @@ static inline bool refract_ray(const struct shade_ctx *c, const struct ray *r, c
 static vec3 surf_shade(const struct shade_ctx *c, const struct ray *r, const struct surf *sf, int depth,
 		       double weight, uint64_t seed, const struct shadow_pre *pre)
 {
-	const struct shader_mat *m = &sf->m;
+	const struct shader_mat *m = sf->m;
 	vec3 col = direct(c, sf->p, sf->n, sf->ng, v3_neg(r->d), m, m->diffuse * (1 - sf->td), weight, seed, pre);
 	if (depth >= LIM_TRACE_DEPTH)
 		return col;
