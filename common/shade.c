@@ -57,6 +57,7 @@ struct shade_ctx {
 	struct shade_light *lights;
 	uint32_t n_lights;
 	double total_samples; /* light samples per shading point, all lights (>= 1) */
+	double cut;           /* SHADE_MIN_WEIGHT / total_samples (direct()) */
 	bool any_transparent; /* some material has transparency > 0 */
 	/* PLAIN MATERIALS: shader_eval's result (but n) for each of the first
 	 * SHADE_PLAIN materials without a shader (bit i of plain_ok) and for the
@@ -382,6 +383,7 @@ int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx
 	c->total_samples = 1;
 	for (uint32_t i = 0; i < s->n_lights; i++)
 		c->total_samples += s->lights[i].shape == LIGHT_POINT ? 1 : s->lights[i].samples;
+	c->cut = SHADE_MIN_WEIGHT / c->total_samples;
 	for (uint32_t i = 0; i < s->n_materials; i++)
 		if (s->materials[i].transparency > 0)
 			c->any_transparent = true;
@@ -596,7 +598,7 @@ static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx 
 	bool shadows = !c->s->image.no_shadows;
 	bool want_spec = m->specular != 0;
 	vec3 kcd = v3_scale(m->diff_colour, kd), kcs = v3_scale(m->spec_colour, m->specular);
-	double cut = SHADE_MIN_WEIGHT / c->total_samples;
+	double cut = c->cut;
 	vec3 col = v3(0, 0, 0);
 	for (uint32_t i = 0; i < c->n_lights; i++) {
 		if (cancel_poll()) /* CANCELLATION: a light's samples take milliseconds at most */
