@@ -337,6 +337,8 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 			_mm_storeu_ps(key, _mm_min_ps(_mm_min_ps(e[0], e[1]), _mm_min_ps(e[2], e[3])));
 			_MM_TRANSPOSE4_PS(e[0], e[1], e[2], e[3]);
 			if (m) { /* nearest first; the others pushed farthest first */
+				/* children_by_entry's sort written out: the call cost gears_s2
+				 * +0.65% instructions here (group_hit4 +5.8%, gcc's inlining) */
 				int cs[4], k = 0;
 				for (int c = 0; c < 4; c++) {
 					if (!(m >> c & 1))
