@@ -24,6 +24,9 @@
 #define FARM_DEPTH_MAX LIM_TILES_QUEUED
 /* result bytes a worker's window may stand for at most (memory, both sides) */
 #define FARM_WINDOW_BYTES (64u * 1024 * 1024)
+/* seconds a tile's pixel takes one thread, assumed until a worker's first
+ * result says (size_window): 0.5 ms for a tile of 32 x 32 */
+#define FARM_SVC_GUESS_PX 0.5e-6
 /* tile latencies kept per worker for its median (the hung-tile deadline) */
 #define FARM_LAT_KEEP 31
 /* hung-tile deadline: this many median tile latencies ... */
