@@ -19,7 +19,8 @@
  * which each result reports): a bandwidth-delay product, so the link never
  * sits idle whatever the latency, bounded by FARM_DEPTH_MAX tiles and
  * FARM_WINDOW_BYTES of results. The round trip is measured by the OFFER,
- * which the worker answers at once.
+ * which the worker answers at once; until the first result, the rate is a
+ * guess (size_window).
  *
  * Round trips saved: without a secret our OFFER travels with our HELLO;
  * with one, with our proof; the first window of tiles follows the scene's
