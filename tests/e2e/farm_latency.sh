@@ -43,6 +43,7 @@ timeout 120 "$BIN/portray-master" "$SCENE" --size 160x120 --tile 8 -o "$T/f3.ppm
 	--secret-file "$T/secret" -w "127.0.0.1:$pb_PORT,127.0.0.1:$pc_PORT" 2>"$T/m3.log" ||
 	fail "render through two proxies with local threads failed (exit $?)"
 cmp "$T/local.ppm" "$T/f3.ppm" || fail "image through two proxies with local threads differs"
-# the window grew past the starting 2 x threads + 1 = 3: it follows the round trip
+# the window is past 2 x threads + 1 = 3: it follows the round trip (from the
+# first tiles on, with a guessed tile time until a result says: docs/protocol.md)
 grep -q "window \([4-9]\|[1-9][0-9]\)" "$T/m2.log" || fail "the window did not follow the round trip"
 echo ok
