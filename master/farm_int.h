@@ -27,6 +27,9 @@
 /* seconds a tile's pixel takes one thread, assumed until a worker's first
  * result says (size_window): 0.5 ms for a tile of 32 x 32 */
 #define FARM_SVC_GUESS_PX 0.5e-6
+/* ... and never less than this a tile: with small tiles a near worker's
+ * first window must not be the whole image before a tile is audited */
+#define FARM_SVC_GUESS_MIN 0.5e-3
 /* tile latencies kept per worker for its median (the hung-tile deadline) */
 #define FARM_LAT_KEEP 31
 /* hung-tile deadline: this many median tile latencies ... */

@@ -287,7 +287,9 @@ static int send_offer(struct worker *w)
 
 /* The window: 2 x threads + 1, plus 1.5 round trips of its tile rate.
  * Before the first result tells the worker's trace time, the rate is a
- * quick tile's (FARM_SVC_GUESS_PX a pixel): the first window then covers the round
+ * quick tile's (FARM_SVC_GUESS_PX a pixel, FARM_SVC_GUESS_MIN at least:
+ * small tiles must not hand a near worker the whole image before it has
+ * returned a tile to audit): the first window then covers the round
  * trip too, where 2 x threads + 1 tiles left a far worker idle for one
  * round trip after its first tiles (at 20 ms one way, a tenth of a 0.5 s
  * render); too many tiles at first costs nothing that the end game's
@@ -296,7 +298,8 @@ static void size_window(struct worker *w)
 {
 	const struct farm *f = w->f;
 	double d = 2.0 * w->threads + 1;
-	double svc = w->svc > 0 ? w->svc : FARM_SVC_GUESS_PX * f->tg.side * f->tg.side;
+	double guess = FARM_SVC_GUESS_PX * f->tg.side * f->tg.side;
+	double svc = w->svc > 0 ? w->svc : guess > FARM_SVC_GUESS_MIN ? guess : FARM_SVC_GUESS_MIN;
 	if (w->rtt > 0)
 		d += ceil(1.5 * w->rtt * w->threads / svc);
 	double tile_bytes = (double)f->tg.side * f->tg.side * render_pixel_bytes(f->px);
