@@ -388,6 +388,25 @@ static bool tri_leaf(const struct group *g, const struct bvh4 *nd, int c)
 	return true;
 }
 
+
+/*
+ * COST-WEIGHTED SAH: a reference's test cost for the builder (bvh_build_cost),
+ * in quarters of a traversal step, measured (docs/performance.md, round 8):
+ * a triangle in a SIMD block is cheaper than a step, a sphere a little
+ * dearer, a cylinder (its caps and the exact quadratic) about three steps.
+ * The tree changes, never a hit: the closest hit is chosen by (t, key)
+ * whatever the order of the tests (cand_better).
+ */
+static uint8_t ref_cost(const struct group *g, uint32_t ref)
+{
+	switch (REF_KIND(ref)) {
+	case REF_TRI: return 3;
+	case REF_SPHERE: return 5;
+	case REF_XPRIM: return g->xp[REF_IDX(ref)].g->kind == PRIM_CYLINDER ? 12 : 4;
+	default: return 4; /* instances: as before */
+	}
+}
+
 /*
  * LEAF BLOCKS (accel_int.h): every leaf of g's tree that is one to
  * ACCEL_MAX_LEAF triangles gets its block, and its node child the
@@ -802,8 +821,18 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	if (!perm || (!inst_only && !g->refs))
 		goto oom;
 	uint32_t max_leaf = inst_only ? ACCEL_INST_LEAF : ACCEL_MAX_LEAF;
-	int brc = boxes ? bvh_build_ex(&g->bvh, boxes, n_bounded, perm, max_leaf, inst_only)
-			: bvh_build_f(&g->bvh, fboxes, n_bounded, perm, max_leaf, inst_only);
+	uint8_t *cost = NULL;
+	if (boxes && !inst_only) {
+		cost = malloc(n_bounded ? n_bounded : 1);
+		if (!cost)
+			goto oom;
+		for (uint32_t k = 0; k < n_bounded; k++)
+			cost[k] = ref_cost(g, all[k]);
+	}
+	int brc = !boxes ? bvh_build_f(&g->bvh, fboxes, n_bounded, perm, max_leaf, inst_only)
+		  : inst_only ? bvh_build_ex(&g->bvh, boxes, n_bounded, perm, max_leaf, true)
+			      : bvh_build_cost(&g->bvh, boxes, n_bounded, perm, max_leaf, cost);
+	free(cost);
 	fboxes = NULL; /* bvh_build_f freed them */
 	if (brc == BVH_CANCELLED)
 		goto cancelled;

@@ -1,5 +1,6 @@
 /*
- * bvh.c - binned SAH builder (16 bins on each axis over centroid bounds),
+ * bvh.c - binned SAH builder (16 bins on each axis over centroid bounds;
+ * items may carry test costs, bvh_build_cost),
  * children stored adjacently, bounds rounded outward to float.
  *
  * The builder polls the calling thread's cancel flag (cancel.h) at every
@@ -26,6 +27,9 @@ _Static_assert(BVH_CANCELLED == CANCEL_RETURN, "the builder gives up with the co
 /* SAH constants relative to one primitive test */
 #define BVH_COST_TRAV 1.0
 #define BVH_COST_ISECT 1.0
+/* item costs (bvh_build_cost) are in quarters of BVH_COST_ISECT; an item
+ * without one costs BVH_COST_UNIT */
+#define BVH_COST_UNIT 4u
 
 /* Items below this many are built by the thread that reached them; a
  * subtree of more may go to another build thread (bvh_set_threads). */
@@ -53,6 +57,7 @@ struct bvh_task {
 struct bvh_ctx {
 	const struct geom_box *boxes; /* the items' boxes; or NULL and fboxes */
 	const float (*fboxes)[6];
+	const uint8_t *cost; /* the items' test costs in BVH_COST_UNIT; or NULL: all 1 */
 	uint32_t *perm;
 	struct bvh_node *nodes;
 	atomic_uint n_nodes; /* nodes handed out (any thread) */
@@ -235,11 +240,17 @@ static uint32_t partition(struct bvh_ctx *B, uint32_t begin, uint32_t end, int a
 	return i;
 }
 
-/* One bin of one axis: its items' boxes and count. */
+/* One bin of one axis: its items' boxes, count and summed cost. */
 struct bvh_bin {
 	struct geom_box b;
-	uint32_t n;
+	uint32_t n, c;
 };
+
+/* Item it's test cost, in quarters of BVH_COST_ISECT. */
+static inline uint32_t item_cost(const struct bvh_ctx *B, uint32_t it)
+{
+	return B->cost ? B->cost[it] : BVH_COST_UNIT;
+}
 
 static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t end, int depth,
 		       const struct bvh_span *span);
@@ -282,7 +293,7 @@ static bool best_split(const struct bvh_bin *bn, double *best, int *best_bin)
 	uint32_t cnt = 0;
 	for (int u = nu - 1; u > 0; u--) {
 		box_grow(&acc, &bn[used[u]].b);
-		cnt += bn[used[u]].n;
+		cnt += bn[used[u]].c;
 		right_cost[u] = box_area(acc) * cnt;
 	}
 	bool better = false;
@@ -290,7 +301,7 @@ static bool best_split(const struct bvh_bin *bn, double *best, int *best_bin)
 	cnt = 0;
 	for (int u = 0; u + 1 < nu; u++) { /* split before bin used[u] + 1 */
 		box_grow(&acc, &bn[used[u]].b);
-		cnt += bn[used[u]].n;
+		cnt += bn[used[u]].c;
 		double c = box_area(acc) * cnt + right_cost[u + 1];
 		if (c < *best)
 			*best = c, *best_bin = used[u] + 1, better = true;
@@ -320,7 +331,7 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 
 	/* one pass bins the items on every axis their centroids spread along */
 	static const struct bvh_bin empty_bin = { { { INFINITY, INFINITY, INFINITY }, { -INFINITY, -INFINITY, -INFINITY } },
-						  0 };
+						  0, 0 };
 	struct bvh_bin bin[3][BVH_BINS];
 	double lo3[3], scale3[3];
 	int live[3], n_live = 0;
@@ -334,17 +345,20 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 		for (int k = 0; k < BVH_BINS; k++)
 			bin[axis][k] = empty_bin;
 	}
+	uint32_t ctot = 0; /* the items' summed cost (exact: integers) */
 	for (uint32_t i = begin; i < end; i++) {
 		if (cancel_poll_every(i))
 			return;
-		uint32_t it = B->perm[i];
+		uint32_t it = B->perm[i], ci = item_cost(B, it);
 		struct geom_box tmp;
 		const struct geom_box *ib = item_box(B, it, &tmp);
 		vec3 c = cent_of(ib);
+		ctot += ci;
 		for (int l = 0; l < n_live; l++) {
 			int axis = live[l];
 			struct bvh_bin *bk = &bin[axis][bin_of(v3_comp(c, axis), lo3[axis], scale3[axis])];
 			bk->n++;
+			bk->c += ci;
 			box_grow(&bk->b, ib);
 		}
 	}
@@ -362,7 +376,7 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 	double node_area = box_area(bb);
 	if (span->amax > big_frac[2] * node_area) {
 		struct geom_box b1[3], b2[3];
-		uint32_t n1[3] = { 0, 0, 0 };
+		uint32_t n1[3] = { 0, 0, 0 }, c1[3] = { 0, 0, 0 };
 		double thr[3];
 		for (int q = 0; q < 3; q++) {
 			b1[q] = b2[q] = EMPTY_BOX;
@@ -375,9 +389,10 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 			struct geom_box tmp;
 			const struct geom_box *ib = item_box(B, it, &tmp);
 			double a = box_area(*ib);
+			uint32_t ci = item_cost(B, it);
 			for (int q = 0; q < 3; q++) {
 				if (a > thr[q])
-					box_grow(&b1[q], ib), n1[q]++;
+					box_grow(&b1[q], ib), n1[q]++, c1[q] += ci;
 				else
 					box_grow(&b2[q], ib);
 			}
@@ -385,7 +400,7 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 		for (int q = 0; q < 3; q++) {
 			if (n1[q] == 0 || n1[q] == n)
 				continue;
-			double c = box_area(b1[q]) * n1[q] + box_area(b2[q]) * (n - n1[q]);
+			double c = box_area(b1[q]) * c1[q] + box_area(b2[q]) * (ctot - c1[q]);
 			if (c < best)
 				best = c, best_big = q;
 		}
@@ -397,8 +412,8 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 		/* partitioned before the leaf test: a leaf keeps this order */
 		mid = partition(B, begin, end, 0, 0, 0, 0, big_frac[best_big] * node_area, &left, &right);
 		spans = true;
-		double split_cost = BVH_COST_TRAV * node_area + BVH_COST_ISECT * best;
-		if (n <= B->max_leaf && BVH_COST_ISECT * node_area * n <= split_cost)
+		double split_cost = BVH_COST_TRAV * node_area + BVH_COST_ISECT * best / BVH_COST_UNIT;
+		if (n <= B->max_leaf && BVH_COST_ISECT * node_area * ctot / BVH_COST_UNIT <= split_cost)
 			goto leaf;
 	} else if (best_axis < 0) { /* every centroid in one place */
 		if (n <= B->max_leaf)
@@ -406,8 +421,8 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 		mid = begin + n / 2;
 	} else {
 		double area = box_area(bb);
-		double split_cost = BVH_COST_TRAV * area + BVH_COST_ISECT * best;
-		double leaf_cost = BVH_COST_ISECT * area * n;
+		double split_cost = BVH_COST_TRAV * area + BVH_COST_ISECT * best / BVH_COST_UNIT;
+		double leaf_cost = BVH_COST_ISECT * area * ctot / BVH_COST_UNIT;
 		if (n <= B->max_leaf && leaf_cost <= split_cost)
 			goto leaf;
 		mid = partition(B, begin, end, best_axis, lo3[best_axis], scale3[best_axis], best_bin, 0, &left,
@@ -573,7 +588,7 @@ int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t 
 }
 
 static int build(struct bvh *b, const struct geom_box *boxes, float (*fboxes)[6], uint32_t n, uint32_t *perm,
-		 uint32_t max_leaf, bool pack)
+		 uint32_t max_leaf, bool pack, const uint8_t *cost)
 {
 	memset(b, 0, sizeof *b);
 	if (n == 0)
@@ -582,6 +597,7 @@ static int build(struct bvh *b, const struct geom_box *boxes, float (*fboxes)[6]
 	memset(&B, 0, sizeof B);
 	B.boxes = boxes;
 	B.fboxes = fboxes;
+	B.cost = cost;
 	B.perm = perm;
 	atomic_init(&B.n_nodes, 1);
 	atomic_init(&B.gave_up, 0);
@@ -631,7 +647,13 @@ static int build(struct bvh *b, const struct geom_box *boxes, float (*fboxes)[6]
 int bvh_build_ex(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf,
 		 bool pack)
 {
-	return build(b, boxes, NULL, n, perm, max_leaf, pack);
+	return build(b, boxes, NULL, n, perm, max_leaf, pack, NULL);
+}
+
+int bvh_build_cost(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf,
+		   const uint8_t *cost)
+{
+	return build(b, boxes, NULL, n, perm, max_leaf, false, cost);
 }
 
 int bvh_build_f(struct bvh *b, float (*boxes)[6], uint32_t n, uint32_t *perm, uint32_t max_leaf, bool pack)
@@ -641,7 +663,7 @@ int bvh_build_f(struct bvh *b, float (*boxes)[6], uint32_t n, uint32_t *perm, ui
 		memset(b, 0, sizeof *b);
 		return 0;
 	}
-	return build(b, NULL, boxes, n, perm, max_leaf, pack);
+	return build(b, NULL, boxes, n, perm, max_leaf, pack, NULL);
 }
 
 void bvh_free(struct bvh *b)

@@ -63,6 +63,12 @@ int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t 
  * store, such as instances), else the SAH decides as in bvh_build. */
 int bvh_build_ex(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf,
 		 bool pack);
+/* bvh_build (no packing) with a test cost per item, cost[it] in quarters
+ * of one item's usual test (a traversal step costs 4): the SAH weighs each
+ * side by its summed cost, so cheap items share leaves and dear ones are
+ * split further. NULL: every item costs 4 (bvh_build's tree). */
+int bvh_build_cost(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf,
+		   const uint8_t *cost);
 /* bvh_build_ex over boxes held as floats (min x y z, then max x y z): the
  * tree bvh_build_ex makes over the same values as doubles, in half the
  * memory (issue 13: a million instances' boxes are 24 MB, not 48). Takes

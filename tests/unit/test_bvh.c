@@ -889,12 +889,87 @@ static void packet_setup(void)
 	scene_free(s);
 }
 
+/* Leaves of b and the items they hold (every item once: the caller checks). */
+static uint32_t count_leaves(const struct bvh *b, uint32_t *items)
+{
+	uint32_t leaves = 0;
+	*items = 0;
+	for (uint32_t ni = 0; ni < b->n_nodes4; ni++)
+		for (int c = 0; c < 4; c++)
+			if (!isnan(b->nodes[ni].lo[0][c]) && b->nodes[ni].n[c]) {
+				leaves++;
+				*items += b->nodes[ni].n[c];
+			}
+	return leaves;
+}
+
+/* COST-WEIGHTED SAH: costs of 4 (or none) give bvh_build's tree; cheap
+ * items share leaves more than dear ones, and a mix splits the dear ones
+ * finer. */
+static void costs(void)
+{
+	uint32_t n = 3000;
+	struct geom_box *bx = malloc(n * sizeof *bx);
+	uint32_t *perm = malloc(n * sizeof *perm), *perm2 = malloc(n * sizeof *perm2);
+	uint8_t *cost = malloc(n);
+	for (uint32_t i = 0; i < n; i++) {
+		vec3 c = v3(rng_uniform(7, 3 * i), rng_uniform(7, 3 * i + 1), rng_uniform(7, 3 * i + 2));
+		double e = 0.02 * (1 + rng_uniform(8, i));
+		bx[i].lo = v3_sub(c, v3(e, e, e));
+		bx[i].hi = v3_add(c, v3(e, e, e));
+	}
+	struct bvh b0, b1, b2;
+	CHECK(bvh_build(&b0, bx, n, perm, 4) == 0);
+	memset(cost, 4, n);
+	CHECK(bvh_build_cost(&b1, bx, n, perm2, 4, cost) == 0);
+	CHECK(b0.n_nodes4 == b1.n_nodes4 && memcmp(b0.nodes, b1.nodes, b0.n_nodes4 * sizeof *b0.nodes) == 0);
+	CHECK(memcmp(perm, perm2, n * sizeof *perm) == 0);
+	bvh_free(&b1);
+	CHECK(bvh_build_cost(&b1, bx, n, perm2, 4, NULL) == 0);
+	CHECK(b0.n_nodes4 == b1.n_nodes4 && memcmp(b0.nodes, b1.nodes, b0.n_nodes4 * sizeof *b0.nodes) == 0);
+	bvh_free(&b1);
+	uint32_t items0, items1, items2;
+	memset(cost, 1, n);
+	CHECK(bvh_build_cost(&b1, bx, n, perm2, 4, cost) == 0);
+	memset(cost, 32, n);
+	CHECK(bvh_build_cost(&b2, bx, n, perm2, 4, cost) == 0);
+	uint32_t l0 = count_leaves(&b0, &items0), l1 = count_leaves(&b1, &items1), l2 = count_leaves(&b2, &items2);
+	CHECK(items0 == n && items1 == n && items2 == n);
+	CHECK(l1 < l0 && l0 < l2); /* cheap: fuller leaves; dear: emptier */
+	bvh_free(&b1);
+	bvh_free(&b2);
+	/* even items cheap, odd ones dear: the dear ones sit in smaller leaves */
+	for (uint32_t i = 0; i < n; i++)
+		cost[i] = i & 1 ? 32 : 1;
+	CHECK(bvh_build_cost(&b1, bx, n, perm2, 4, cost) == 0);
+	double sum[2] = { 0, 0 }, cnt[2] = { 0, 0 };
+	for (uint32_t ni = 0; ni < b1.n_nodes4; ni++)
+		for (int c = 0; c < 4; c++) {
+			const struct bvh4 *p = &b1.nodes[ni];
+			if (isnan(p->lo[0][c]) || !p->n[c])
+				continue;
+			for (uint32_t k = p->idx[c]; k < p->idx[c] + p->n[c]; k++) {
+				sum[perm2[k] & 1] += p->n[c];
+				cnt[perm2[k] & 1]++;
+			}
+		}
+	/* (about 1.0 against 2.4 here; 1.6 each when costs are ignored) */
+	CHECK(cnt[0] + cnt[1] == n && sum[1] / cnt[1] < 0.75 * (sum[0] / cnt[0]));
+	bvh_free(&b1);
+	bvh_free(&b0);
+	free(bx);
+	free(perm);
+	free(perm2);
+	free(cost);
+}
+
 int main(void)
 {
 	const char *full = getenv("PORTRAY_TEST_FULL");
 	if (full && *full && strcmp(full, "0") != 0)
 		n_rays = N_RAYS_FULL;
 	builder();
+	costs();
 	big_leaf();
 	tri_margins();
 	packet_setup();
