@@ -57,7 +57,7 @@ struct bvh_task {
 struct bvh_ctx {
 	const struct geom_box *boxes; /* the items' boxes; or NULL and fboxes */
 	const float (*fboxes)[6];
-	const uint8_t *cost; /* the items' test costs in BVH_COST_UNIT; or NULL: all 1 */
+	const uint8_t *cost; /* the items' test costs (item_cost); or NULL */
 	uint32_t *perm;
 	struct bvh_node *nodes;
 	atomic_uint n_nodes; /* nodes handed out (any thread) */
@@ -240,13 +240,15 @@ static uint32_t partition(struct bvh_ctx *B, uint32_t begin, uint32_t end, int a
 	return i;
 }
 
-/* One bin of one axis: its items' boxes, count and summed cost. */
+/* One bin of one axis: its items' boxes, count and summed cost (64 bits:
+ * exact for any count of items at any cost up to 255). */
 struct bvh_bin {
 	struct geom_box b;
-	uint32_t n, c;
+	uint32_t n;
+	uint64_t c;
 };
 
-/* Item it's test cost, in quarters of BVH_COST_ISECT. */
+/* Item it's test cost, in quarters of BVH_COST_ISECT (BVH_COST_UNIT without costs). */
 static inline uint32_t item_cost(const struct bvh_ctx *B, uint32_t it)
 {
 	return B->cost ? B->cost[it] : BVH_COST_UNIT;
@@ -290,7 +292,7 @@ static bool best_split(const struct bvh_bin *bn, double *best, int *best_bin)
 	/* right_cost[u]: the bins from used[u] up */
 	double right_cost[BVH_BINS];
 	struct geom_box acc = EMPTY_BOX;
-	uint32_t cnt = 0;
+	uint64_t cnt = 0;
 	for (int u = nu - 1; u > 0; u--) {
 		box_grow(&acc, &bn[used[u]].b);
 		cnt += bn[used[u]].c;
@@ -345,7 +347,7 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 		for (int k = 0; k < BVH_BINS; k++)
 			bin[axis][k] = empty_bin;
 	}
-	uint32_t ctot = 0; /* the items' summed cost (exact: integers) */
+	uint64_t ctot = 0; /* the items' summed cost (exact: integers, in any order) */
 	for (uint32_t i = begin; i < end; i++) {
 		if (cancel_poll_every(i))
 			return;
@@ -376,7 +378,8 @@ static void build_node(struct bvh_ctx *B, uint32_t ni, uint32_t begin, uint32_t 
 	double node_area = box_area(bb);
 	if (span->amax > big_frac[2] * node_area) {
 		struct geom_box b1[3], b2[3];
-		uint32_t n1[3] = { 0, 0, 0 }, c1[3] = { 0, 0, 0 };
+		uint32_t n1[3] = { 0, 0, 0 };
+		uint64_t c1[3] = { 0, 0, 0 };
 		double thr[3];
 		for (int q = 0; q < 3; q++) {
 			b1[q] = b2[q] = EMPTY_BOX;
