@@ -391,9 +391,10 @@ static bool tri_leaf(const struct group *g, const struct bvh4 *nd, int c)
 
 /*
  * COST-WEIGHTED SAH: a reference's test cost for the builder (bvh_build_cost),
- * in quarters of a traversal step, measured (docs/performance.md, round 8):
- * a triangle in a SIMD block is cheaper than a step, a sphere a little
- * dearer, a cylinder (its caps and the exact quadratic) about three steps.
+ * in quarters of a traversal step (BVH_COST_UNIT = 4), measured
+ * (docs/performance.md, round 8): a triangle in a SIMD block is cheaper
+ * than a step, a sphere a little dearer, a cylinder (its caps and the
+ * exact quadratic) about three steps.
  * The tree changes, never a hit: the closest hit is chosen by (t, key)
  * whatever the order of the tests (cand_better).
  */
@@ -402,8 +403,8 @@ static uint8_t ref_cost(const struct group *g, uint32_t ref)
 	switch (REF_KIND(ref)) {
 	case REF_TRI: return 3;
 	case REF_SPHERE: return 5;
-	case REF_XPRIM: return g->xp[REF_IDX(ref)].g->kind == PRIM_CYLINDER ? 12 : 4;
-	default: return 4; /* instances: as before */
+	case REF_XPRIM: return g->xp[REF_IDX(ref)].g->kind == PRIM_CYLINDER ? 12 : BVH_COST_UNIT;
+	default: return BVH_COST_UNIT; /* instances: as before */
 	}
 }
 

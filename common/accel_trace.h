@@ -276,6 +276,14 @@ static inline bool ref_occludes(const struct accel *A, const struct group *g, ui
 	return hit;
 }
 
+/* Whether r meets g's one ground plane (g->plane1) in (tmin, tmax), at
+ * *t: geom_intersect's plane case, the same arithmetic, inline. */
+static inline bool plane1_hit(const struct group *g, const struct trace *r, double *t)
+{
+	const struct geom_obj *go = g->plane1;
+	return geom_plane_t(go->u.pl.pos, go->u.pl.n, r->o, r->d, t) && *t > r->tmin && *t < r->tmax;
+}
+
 /* The unbounded references of g: the start of every closest-hit query.
  * Same contract as ref_test. */
 static inline bool group_hit_unbounded(const struct accel *A, const struct group *g, struct trace *r,
@@ -283,9 +291,7 @@ static inline bool group_hit_unbounded(const struct accel *A, const struct group
 {
 	if (g->plane1) { /* accel_unb_hit's plane test, the common case of one ground plane */
 		double t;
-		const struct geom_obj *go = g->plane1;
-		if (geom_plane_t(go->u.pl.pos, go->u.pl.n, r->o, r->d, &t) && t > r->tmin && t < r->tmax &&
-		    cand_better(best, g->unb[0], t)) {
+		if (plane1_hit(g, r, &t) && cand_better(best, g->unb[0], t)) {
 			cand_take(best, r, g->unb[0], t);
 			best->part = GEOM_PART_MAIN;
 			return true;
@@ -296,16 +302,11 @@ static inline bool group_hit_unbounded(const struct accel *A, const struct group
 }
 
 /* ref_occludes of g's unbounded reference k; the one ground plane
- * (g->plane1) tested inline, as group_hit_unbounded tests it (geom_intersect's
- * plane case, the same arithmetic). */
+ * (g->plane1, then k is 0) tested inline, as group_hit_unbounded tests it. */
 static inline bool unb_occludes(const struct accel *A, const struct group *g, uint32_t k, struct trace *r)
 {
-	if (g->plane1) {
-		double t;
-		const struct geom_obj *go = g->plane1;
-		return geom_plane_t(go->u.pl.pos, go->u.pl.n, r->o, r->d, &t) && t > r->tmin && t < r->tmax;
-	}
-	return ref_occludes(A, g, g->unb[k], r);
+	double t;
+	return g->plane1 ? plane1_hit(g, r, &t) : ref_occludes(A, g, g->unb[k], r);
 }
 
 /* Whether ref names a reference of g (kind and index in range): a hint

@@ -27,9 +27,7 @@ _Static_assert(BVH_CANCELLED == CANCEL_RETURN, "the builder gives up with the co
 /* SAH constants relative to one primitive test */
 #define BVH_COST_TRAV 1.0
 #define BVH_COST_ISECT 1.0
-/* item costs (bvh_build_cost) are in quarters of BVH_COST_ISECT; an item
- * without one costs BVH_COST_UNIT */
-#define BVH_COST_UNIT 4u
+/* item costs (bvh_build_cost) are in BVH_COST_UNIT parts of BVH_COST_ISECT */
 
 /* Items below this many are built by the thread that reached them; a
  * subtree of more may go to another build thread (bvh_set_threads). */
@@ -248,7 +246,7 @@ struct bvh_bin {
 	uint64_t c;
 };
 
-/* Item it's test cost, in quarters of BVH_COST_ISECT (BVH_COST_UNIT without costs). */
+/* Item it's test cost in BVH_COST_UNIT parts of BVH_COST_ISECT (the unit itself without costs). */
 static inline uint32_t item_cost(const struct bvh_ctx *B, uint32_t it)
 {
 	return B->cost ? B->cost[it] : BVH_COST_UNIT;

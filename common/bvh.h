@@ -63,10 +63,13 @@ int bvh_build(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t 
  * store, such as instances), else the SAH decides as in bvh_build. */
 int bvh_build_ex(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf,
 		 bool pack);
-/* bvh_build (no packing) with a test cost per item, cost[it] in quarters
- * of one item's usual test (a traversal step costs 4): the SAH weighs each
- * side by its summed cost, so cheap items share leaves and dear ones are
- * split further. NULL: every item costs 4 (bvh_build's tree). */
+/* An item's usual test cost, which a traversal step costs too, in the
+ * units of bvh_build_cost's costs. */
+#define BVH_COST_UNIT 4u
+/* bvh_build (no packing) with a test cost per item, cost[it] in
+ * BVH_COST_UNIT parts of one item's usual test: the SAH weighs each side
+ * by its summed cost, so cheap items share leaves and dear ones are split
+ * further. NULL: every item costs BVH_COST_UNIT (bvh_build's tree). */
 int bvh_build_cost(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint32_t *perm, uint32_t max_leaf,
 		   const uint8_t *cost);
 /* bvh_build_ex over boxes held as floats (min x y z, then max x y z): the

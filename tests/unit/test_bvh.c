@@ -903,7 +903,7 @@ static uint32_t count_leaves(const struct bvh *b, uint32_t *items)
 	return leaves;
 }
 
-/* COST-WEIGHTED SAH: costs of 4 (or none) give bvh_build's tree; cheap
+/* COST-WEIGHTED SAH: costs of BVH_COST_UNIT (or none) give bvh_build's tree; cheap
  * items share leaves more than dear ones, and a mix splits the dear ones
  * finer. */
 static void costs(void)
@@ -920,7 +920,7 @@ static void costs(void)
 	}
 	struct bvh b0, b1, b2;
 	CHECK(bvh_build(&b0, bx, n, perm, 4) == 0);
-	memset(cost, 4, n);
+	memset(cost, BVH_COST_UNIT, n);
 	CHECK(bvh_build_cost(&b1, bx, n, perm2, 4, cost) == 0);
 	CHECK(b0.n_nodes4 == b1.n_nodes4 && memcmp(b0.nodes, b1.nodes, b0.n_nodes4 * sizeof *b0.nodes) == 0);
 	CHECK(memcmp(perm, perm2, n * sizeof *perm) == 0);
