@@ -10,6 +10,8 @@
  */
 #include "common/accel.h"
 
+#include <string.h>
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -379,55 +381,122 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 }
 
 /*
- * bvh_hit4 for four rays from one origin (the same floats in P->o's lanes):
- * each node's children are tested against the packet as a whole, with the
- * interval of the rays' inverses per axis. The plane less the origin, d,
- * is the same float for every ray, and fl(d * x) is monotonic in x, so the
- * smaller of d times the least and d times the greatest inverse is the
- * least entry distance over the rays on that axis, exactly, and the larger
- * of the far products the greatest exit; with the least tmin and greatest
- * tmax over the rays, a child that any ray's own test (RAY_NODE) lets
- * through passes. Leaves are tested for all four rays (the triangle
- * pre-test and the exact tests decide), a subtree popped while its entry
- * is within some ray's tmax.
+ * bvh_hit4 for 4 * ng rays from one origin (the same floats in every P[j]->o
+ * lane), ng packets of four (ng 1 or 4): each node's children are tested
+ * against the rays as a whole, with the interval of the rays' inverses per
+ * axis. The plane less the origin, d, is the same float for every ray, and
+ * fl(d * x) is monotonic in x, so the smaller of d times the least and d
+ * times the greatest inverse is the least entry distance over the rays on
+ * that axis, exactly, and the larger of the far products the greatest exit;
+ * with the least tmin and greatest tmax over the rays, a child that any
+ * ray's own test (RAY_NODE) lets through passes. A subtree is popped while
+ * its entry is within some ray's tmax. At a leaf each packet of four whose
+ * own interval (the same test, lane j: packet j) meets the leaf's box, in
+ * its parent node, is tested whole (the triangle pre-test and the exact
+ * tests decide); with ng 1 that test is the node's, so it is not repeated.
  */
-static inline __attribute__((always_inline)) void bvh_hit4o(const struct accel *A, const struct group *g,
-							    struct trace tr[4], struct cand best[4], bool found[4],
-							    const struct ray4x *P, const uint32_t oct)
+static inline __attribute__((always_inline)) void bvh_hit_o(const struct accel *A, const struct group *g,
+							    struct trace *tr, struct cand *best, bool *found,
+							    const struct ray4x *P, const uint32_t oct, const int ng)
 {
 	const struct bvh4 *nodes = g->bvh.nodes;
 	const uint32_t near[3] = { 12 * (oct & 1), 4 + 12 * (oct >> 1 & 1), 8 + 12 * (oct >> 2 & 1) };
 	const uint32_t far[3] = { 12 * (~oct & 1), 4 + 12 * (~oct >> 1 & 1), 8 + 12 * (~oct >> 2 & 1) };
-	__m128 o[3], nlo[3], nhi[3], flo[3], fhi[3];
+	/* lane j: packet j's least and greatest inverses (ng 4) */
+	__m128 o[3], nlo[3], nhi[3], flo[3], fhi[3], snlo[3], snhi[3], sflo[3], sfhi[3];
 	for (int k = 0; k < 3; k++) {
-		o[k] = _mm_shuffle_ps(P->o[k], P->o[k], 0); /* the shared origin */
-		__m128 a = P->inv_near[k], b = P->inv_far[k];
-		__m128 a2 = _mm_shuffle_ps(a, a, _MM_SHUFFLE(1, 0, 3, 2)), b2 = _mm_shuffle_ps(b, b, _MM_SHUFFLE(1, 0, 3, 2));
-		__m128 amin = _mm_min_ps(a, a2), amax = _mm_max_ps(a, a2);
-		__m128 bmin = _mm_min_ps(b, b2), bmax = _mm_max_ps(b, b2);
+		o[k] = _mm_shuffle_ps(P[0].o[k], P[0].o[k], 0); /* the shared origin */
+		__m128 amin, amax, bmin, bmax;
+		if (ng == 1) {
+			__m128 a = P[0].inv_near[k], b = P[0].inv_far[k];
+			__m128 a2 = _mm_shuffle_ps(a, a, _MM_SHUFFLE(1, 0, 3, 2));
+			__m128 b2 = _mm_shuffle_ps(b, b, _MM_SHUFFLE(1, 0, 3, 2));
+			amin = _mm_min_ps(a, a2), amax = _mm_max_ps(a, a2);
+			bmin = _mm_min_ps(b, b2), bmax = _mm_max_ps(b, b2);
+		} else {
+			__m128 a0 = P[0].inv_near[k], a1 = P[1].inv_near[k], a2 = P[2].inv_near[k], a3 = P[3].inv_near[k];
+			__m128 b0 = P[0].inv_far[k], b1 = P[1].inv_far[k], b2 = P[2].inv_far[k], b3 = P[3].inv_far[k];
+			_MM_TRANSPOSE4_PS(a0, a1, a2, a3); /* lane j: packet j's ray 0, 1, 2, 3 */
+			_MM_TRANSPOSE4_PS(b0, b1, b2, b3);
+			snlo[k] = _mm_min_ps(_mm_min_ps(a0, a1), _mm_min_ps(a2, a3));
+			snhi[k] = _mm_max_ps(_mm_max_ps(a0, a1), _mm_max_ps(a2, a3));
+			sflo[k] = _mm_min_ps(_mm_min_ps(b0, b1), _mm_min_ps(b2, b3));
+			sfhi[k] = _mm_max_ps(_mm_max_ps(b0, b1), _mm_max_ps(b2, b3));
+			amin = _mm_min_ps(snlo[k], _mm_shuffle_ps(snlo[k], snlo[k], _MM_SHUFFLE(1, 0, 3, 2)));
+			amax = _mm_max_ps(snhi[k], _mm_shuffle_ps(snhi[k], snhi[k], _MM_SHUFFLE(1, 0, 3, 2)));
+			bmin = _mm_min_ps(sflo[k], _mm_shuffle_ps(sflo[k], sflo[k], _MM_SHUFFLE(1, 0, 3, 2)));
+			bmax = _mm_max_ps(sfhi[k], _mm_shuffle_ps(sfhi[k], sfhi[k], _MM_SHUFFLE(1, 0, 3, 2)));
+		}
 		nlo[k] = _mm_min_ps(amin, _mm_shuffle_ps(amin, amin, _MM_SHUFFLE(2, 3, 0, 1)));
 		nhi[k] = _mm_max_ps(amax, _mm_shuffle_ps(amax, amax, _MM_SHUFFLE(2, 3, 0, 1)));
 		flo[k] = _mm_min_ps(bmin, _mm_shuffle_ps(bmin, bmin, _MM_SHUFFLE(2, 3, 0, 1)));
 		fhi[k] = _mm_max_ps(bmax, _mm_shuffle_ps(bmax, bmax, _MM_SHUFFLE(2, 3, 0, 1)));
 	}
-	const __m128 tmin1 = _mm_set1_ps(lanes_min(lanes_box_tmin(tr, P->tscale)));
-	float tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), lanes_box_tmax(tr, P->tscale))); /* the greatest */
+	/* the least tmin and greatest tmax: of all the rays, and (ng 4) lane j
+	 * packet j's */
+	__m128 stmin, stmax;
+	float tmin;
+	if (ng == 1) {
+		stmin = lanes_box_tmin(tr, P[0].tscale);
+		stmax = lanes_box_tmax(tr, P[0].tscale);
+	} else {
+		__m128 t0 = lanes_box_tmin(tr, P[0].tscale), t1 = lanes_box_tmin(tr + 4, P[1].tscale),
+		       t2 = lanes_box_tmin(tr + 8, P[2].tscale), t3 = lanes_box_tmin(tr + 12, P[3].tscale);
+		_MM_TRANSPOSE4_PS(t0, t1, t2, t3);
+		stmin = _mm_min_ps(_mm_min_ps(t0, t1), _mm_min_ps(t2, t3));
+	}
+#define PACKET_TMAX()                                                                                      \
+	do {                                                                                               \
+		if (ng == 1) {                                                                             \
+			stmax = lanes_box_tmax(tr, P[0].tscale);                                           \
+		} else {                                                                                   \
+			__m128 u0 = lanes_box_tmax(tr, P[0].tscale), u1 = lanes_box_tmax(tr + 4, P[1].tscale),   \
+			       u2 = lanes_box_tmax(tr + 8, P[2].tscale), u3 = lanes_box_tmax(tr + 12, P[3].tscale); \
+			_MM_TRANSPOSE4_PS(u0, u1, u2, u3);                                                 \
+			stmax = _mm_max_ps(_mm_max_ps(u0, u1), _mm_max_ps(u2, u3));                        \
+		}                                                                                          \
+	} while (0)
+	if (ng > 1)
+		PACKET_TMAX();
+	tmin = lanes_min(stmin);
+	const __m128 tmin1 = _mm_set1_ps(tmin);
+	float tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), stmax)); /* the greatest */
 	struct {
-		float t; /* the packet's least entry distance */
+		float t; /* the rays' least entry distance */
 		uint32_t idx, n;
+		uint32_t from; /* ng 4: the parent node's index * 4 + the child's slot */
 	} stack[3 * BVH_MAX_DEPTH + 4];
 	int sp = 0;
-	uint32_t idx = 0, n = 0;
+	uint32_t idx = 0, n = 0, from = 0;
 	uint32_t polls = ACCEL_POLL_POPS;
-	struct tri4 q; /* TRIANGLE PRE-TEST, set up at the first leaf that needs it */
-	bool q_ready = false;
+	struct tri4 q[4]; /* TRIANGLE PRE-TEST per packet, set up at the first leaf that needs it */
+	bool q_ready[4] = { false, false, false, false };
 	for (;;) {
 		if (n) {
-			if (n & LEAF_BLOCK)
-				leaf4_block(g, tr, best, found, &g->tblk[idx], n & ~LEAF_BLOCK, 15, &q, &q_ready);
-			else
-				leaf4(A, g, tr, best, found, idx, n, 15, &q, &q_ready);
-			tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), lanes_box_tmax(tr, P->tscale)));
+			unsigned gm = 1;
+			if (ng > 1) { /* the packets whose interval meets the leaf's box */
+				const float *b = (const float *)(const void *)&nodes[from >> 2];
+				const uint32_t c = from & 3;
+				__m128 t0 = stmin, t1 = stmax;
+				for (int k = 0; k < 3; k++) {
+					__m128 dn = _mm_sub_ps(_mm_set1_ps(b[near[k] + c]), o[k]);
+					__m128 df = _mm_sub_ps(_mm_set1_ps(b[far[k] + c]), o[k]);
+					t0 = _mm_max_ps(t0, _mm_min_ps(_mm_mul_ps(dn, snlo[k]), _mm_mul_ps(dn, snhi[k])));
+					t1 = _mm_min_ps(t1, _mm_max_ps(_mm_mul_ps(df, sflo[k]), _mm_mul_ps(df, sfhi[k])));
+				}
+				gm = (unsigned)_mm_movemask_ps(_mm_cmple_ps(t0, t1));
+			}
+			for (; gm; gm &= gm - 1) {
+				int j = __builtin_ctz(gm);
+				if (n & LEAF_BLOCK)
+					leaf4_block(g, tr + 4 * j, best + 4 * j, found + 4 * j, &g->tblk[idx],
+						    n & ~LEAF_BLOCK, 15, &q[j], &q_ready[j]);
+				else
+					leaf4(A, g, tr + 4 * j, best + 4 * j, found + 4 * j, idx, n, 15, &q[j],
+					      &q_ready[j]);
+			}
+			PACKET_TMAX();
+			tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), stmax));
 		} else {
 			const struct bvh4 *nd = &nodes[idx];
 			const float *b = (const float *)(const void *)nd; /* rows as in node4_hit */
@@ -446,10 +515,14 @@ static inline __attribute__((always_inline)) void bvh_hit4o(const struct accel *
 				for (int j = k - 1; j >= 1; j--) {
 					stack[sp].idx = nd->idx[cs[j]];
 					stack[sp].n = nd->n[cs[j]];
+					if (ng > 1)
+						stack[sp].from = idx * 4 + (uint32_t)cs[j];
 					stack[sp++].t = key[cs[j]];
 				}
-				idx = nd->idx[cs[0]];
+				if (ng > 1)
+					from = idx * 4 + (uint32_t)cs[0];
 				n = nd->n[cs[0]];
+				idx = nd->idx[cs[0]];
 				continue;
 			}
 		}
@@ -468,22 +541,42 @@ static inline __attribute__((always_inline)) void bvh_hit4o(const struct accel *
 		}
 		idx = stack[sp].idx;
 		n = stack[sp].n;
+		if (ng > 1)
+			from = stack[sp].from;
 	}
+#undef PACKET_TMAX
 }
 
-/* bvh_hit4o, one copy per octant. */
+/* bvh_hit_o for one packet, one copy per octant. */
 static __attribute__((noinline)) void group_hit4o(const struct accel *A, const struct group *g, struct trace tr[4],
 						  struct cand best[4], bool found[4], const struct ray4x *P, uint32_t oct)
 {
 	switch (oct) {
-	case 0: bvh_hit4o(A, g, tr, best, found, P, 0); break;
-	case 1: bvh_hit4o(A, g, tr, best, found, P, 1); break;
-	case 2: bvh_hit4o(A, g, tr, best, found, P, 2); break;
-	case 3: bvh_hit4o(A, g, tr, best, found, P, 3); break;
-	case 4: bvh_hit4o(A, g, tr, best, found, P, 4); break;
-	case 5: bvh_hit4o(A, g, tr, best, found, P, 5); break;
-	case 6: bvh_hit4o(A, g, tr, best, found, P, 6); break;
-	default: bvh_hit4o(A, g, tr, best, found, P, 7); break;
+	case 0: bvh_hit_o(A, g, tr, best, found, P, 0, 1); break;
+	case 1: bvh_hit_o(A, g, tr, best, found, P, 1, 1); break;
+	case 2: bvh_hit_o(A, g, tr, best, found, P, 2, 1); break;
+	case 3: bvh_hit_o(A, g, tr, best, found, P, 3, 1); break;
+	case 4: bvh_hit_o(A, g, tr, best, found, P, 4, 1); break;
+	case 5: bvh_hit_o(A, g, tr, best, found, P, 5, 1); break;
+	case 6: bvh_hit_o(A, g, tr, best, found, P, 6, 1); break;
+	default: bvh_hit_o(A, g, tr, best, found, P, 7, 1); break;
+	}
+}
+
+/* bvh_hit_o for four packets, one copy per octant. */
+static __attribute__((noinline)) void group_hit16o(const struct accel *A, const struct group *g, struct trace tr[16],
+						   struct cand best[16], bool found[16], const struct ray4x P[4],
+						   uint32_t oct)
+{
+	switch (oct) {
+	case 0: bvh_hit_o(A, g, tr, best, found, P, 0, 4); break;
+	case 1: bvh_hit_o(A, g, tr, best, found, P, 1, 4); break;
+	case 2: bvh_hit_o(A, g, tr, best, found, P, 2, 4); break;
+	case 3: bvh_hit_o(A, g, tr, best, found, P, 3, 4); break;
+	case 4: bvh_hit_o(A, g, tr, best, found, P, 4, 4); break;
+	case 5: bvh_hit_o(A, g, tr, best, found, P, 5, 4); break;
+	case 6: bvh_hit_o(A, g, tr, best, found, P, 6, 4); break;
+	default: bvh_hit_o(A, g, tr, best, found, P, 7, 4); break;
 	}
 }
 
@@ -530,6 +623,28 @@ static void group_hit4(const struct accel *A, const struct group *g, struct trac
 		}
 	}
 	for (int i = 0; i < 4; i++) {
+		hit[i] = found[i];
+		if (found[i])
+			accel_finish(A, g, &tr[i], &best[i], &h[i]);
+	}
+}
+
+/* group_hit for four packets of four rays from one origin and of one
+ * octant (tr[4 * j ...]: packet j) through g's tree (g->bvh.n_nodes4). */
+static void group_hit16(const struct accel *A, const struct group *g, struct trace tr[16], uint32_t oct,
+			struct hit h[16], bool hit[16])
+{
+	struct cand best[16];
+	bool found[16];
+	struct ray4x P[4];
+	for (int i = 0; i < 16; i++) {
+		cand_init(&best[i]);
+		found[i] = group_hit_unbounded(A, g, &tr[i], &best[i], false);
+	}
+	for (int j = 0; j < 4; j++)
+		ray_box4(tr + 4 * j, g->center, &P[j]);
+	group_hit16o(A, g, tr, best, found, P, oct);
+	for (int i = 0; i < 16; i++) {
 		hit[i] = found[i];
 		if (found[i])
 			accel_finish(A, g, &tr[i], &best[i], &h[i]);
@@ -726,6 +841,25 @@ void accel_intersect4(const struct accel *a, const struct ray r[4], struct hit h
 #endif
 	for (int i = 0; i < 4; i++) /* rays of different octants, a root without a tree */
 		hit[i] = accel_intersect(a, &r[i], &h[i]);
+}
+
+void accel_intersect16(const struct accel *a, const struct ray r[16], struct hit h[16], bool hit[16])
+{
+#if defined(__SSE2__)
+	struct trace tr[16];
+	uint32_t oct[4];
+	bool one = true; /* one origin, one octant: the whole-packet traversal */
+	for (int i = 1; i < 16 && one; i++)
+		one = memcmp(&r[i].o, &r[0].o, sizeof r[0].o) == 0;
+	for (int j = 0; j < 4 && one; j++)
+		one = packet_start(a, r + 4 * j, tr + 4 * j, &oct[j]) && oct[j] == oct[0];
+	if (one) {
+		group_hit16(a, a->root, tr, oct[0], h, hit);
+		return;
+	}
+#endif
+	for (int j = 0; j < 4; j++)
+		accel_intersect4(a, r + 4 * j, h + 4 * j, hit + 4 * j);
 }
 
 void accel_occluded4(const struct accel *a, const struct ray r[4], bool occ[4], uint32_t *hint)

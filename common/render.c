@@ -4,11 +4,11 @@
  * The same code runs in the master (locally) and in every worker: a tile is
  * a rectangle of pixels, each pixel's colour comes from filter_pixel over
  * shade_trace, so it depends on the scene and the pixel alone. With one eye
- * ray per pixel (filter standard), the tile goes in 2x2 blocks whose eye
- * rays find their closest hits together (accel_intersect4: the same hits,
- * faster) and whose shadow rays toward each point light go together too
- * (shade_eye_hit4); each pixel gets exactly the colour filter_pixel would
- * give. Other filters trace super-sample grids and adaptive corners four
+ * ray per pixel (filter standard), the tile goes in 4x4 blocks whose
+ * eye rays find their closest hits together (accel_intersect16: the same
+ * hits, faster), shaded as four 2x2 blocks whose shadow rays toward each
+ * point light go together too (shade_eye_hit4); each pixel gets exactly
+ * the colour filter_pixel would give. Other filters trace super-sample grids and adaptive corners four
  * rays at a time the same way (filter_pixels4 over trace_shade4), a grid's
  * packets running across four pixels of a row.
  */
@@ -187,74 +187,111 @@ static void put_rgbf32(vec3 c, uint8_t *out)
 }
 
 /*
- * A 2x2 block of a tile for a filter_single_ray chain: its n pixels inside
+ * A 4x4 block of a tile for a filter_single_ray chain, as up to four 2x2
+ * blocks (block j at 4 * j in the arrays): each one's n[j] pixels inside
  * the image, in order, where their colours go, and their eye rays
- * (filter_eye_ray4) made ready for trace_ready4; traced there, each
- * colour is what filter_pixel over trace_shade gives.
+ * (filter_eye_block, filter_eye_ray4) made ready for trace_ready4; traced
+ * there, each colour is what filter_pixel over trace_shade gives.
  */
-struct eye_block {
-	int n;
-	uint8_t *dst[4];
-	struct ray e[4], u[4];
-	bool ok[4];
-	uint64_t seed[4];
+struct eye_quad {
+	int nb;
+	int n[4];
+	uint8_t *dst[16];
+	struct ray e[16], u[16];
+	bool ok[16];
+	uint64_t seed[16];
 };
 
-/* Walk over a tile's 2x2 blocks, row by row. */
+/* Walk over a tile's 4x4 blocks, row by row. */
 struct block_walk {
 	const struct renderer *r;
 	struct tile_rect t;
 	const struct pixel_store *ps;
 	uint8_t *rgb;
-	uint32_t i, j; /* the next block's top-left pixel in the tile */
+	uint32_t i, j; /* the next 4x4 block's top-left pixel in the tile */
 };
 
-/* The next block with a pixel inside the image into b (the tile's pixels
- * outside the image on the way written black); false at the tile's end. */
-static bool next_block(struct block_walk *w, struct eye_block *b)
+/* The 2x2 block at tile pixel (i, j) as q's next block, unless it has no
+ * pixel inside the tile and the image (the tile's pixels outside the image
+ * on the way written black). */
+static void add_block(const struct block_walk *w, uint32_t i, uint32_t j, struct eye_quad *q)
 {
 	const struct renderer *r = w->r;
 	struct tile_rect t = w->t;
 	size_t bpp = w->ps->bpp;
+	const int at = 4 * q->nb;
+	uint32_t px[4], py[4];
+	int n = 0;
+	for (uint32_t k = 0; k < 4; k++) {
+		uint32_t ii = i + (k & 1), jj = j + (k >> 1);
+		if (ii >= t.w || jj >= t.h)
+			continue;
+		uint64_t x = (uint64_t)t.x + ii, y = (uint64_t)t.y + jj;
+		uint8_t *p = w->rgb + ((size_t)jj * t.w + ii) * bpp;
+		if (x >= r->w || y >= r->h) {
+			memset(p, 0, bpp);
+			continue;
+		}
+		px[n] = (uint32_t)x;
+		py[n] = (uint32_t)y;
+		q->dst[at + n++] = p;
+	}
+	if (n == 0)
+		return;
+	q->n[q->nb++] = n;
+	if (n == 4) /* the whole block: its columns and rows shared */
+		filter_eye_block(&r->fc, px[0], py[0], q->e + at, q->seed + at);
+	else
+		filter_eye_ray4(&r->fc, px, py, n, q->e + at, q->seed + at);
+	if (n >= PACKET_MIN_RAYS)
+		shade_eye_rays4(q->e + at, n, q->u + at, q->ok + at);
+}
+
+/* The next 4x4 block with a pixel inside the image into q; false at the
+ * tile's end. */
+static bool next_quad(struct block_walk *w, struct eye_quad *q)
+{
+	struct tile_rect t = w->t;
 	while (w->j < t.h) {
 		uint32_t i = w->i, j = w->j;
-		w->i += 2;
+		w->i += 4;
 		if (w->i >= t.w) {
 			w->i = 0;
-			w->j += 2;
+			w->j += 4;
 		}
-		uint32_t px[4], py[4];
-		int n = 0;
-		for (uint32_t k = 0; k < 4; k++) {
-			uint32_t ii = i + (k & 1), jj = j + (k >> 1);
-			if (ii >= t.w || jj >= t.h)
-				continue;
-			uint64_t x = (uint64_t)t.x + ii, y = (uint64_t)t.y + jj;
-			uint8_t *p = w->rgb + ((size_t)jj * t.w + ii) * bpp;
-			if (x >= r->w || y >= r->h) {
-				memset(p, 0, bpp);
-				continue;
-			}
-			px[n] = (uint32_t)x;
-			py[n] = (uint32_t)y;
-			b->dst[n++] = p;
-		}
-		if (n == 0)
-			continue;
-		b->n = n;
-		if (n == 4) /* the whole block: its columns and rows shared */
-			filter_eye_block(&r->fc, px[0], py[0], b->e, b->seed);
-		else
-			filter_eye_ray4(&r->fc, px, py, n, b->e, b->seed);
-		if (n >= PACKET_MIN_RAYS)
-			shade_eye_rays4(b->e, n, b->u, b->ok);
-		return true;
+		q->nb = 0;
+		for (uint32_t k = 0; k < 4; k++)
+			add_block(w, i + 2 * (k & 1), j + 2 * (k >> 1), q);
+		if (q->nb)
+			return true;
 	}
 	return false;
 }
 
+/* The colours of q's pixels (block j's at 4 * j): a whole 4x4 block's
+ * closest hits from one accel_intersect16, shaded block by block; any
+ * other's block by block through trace_ready4. */
+static void trace_quad(const struct renderer *r, const struct eye_quad *q, vec3 out[16])
+{
+	if (q->nb < 4 || q->n[0] + q->n[1] + q->n[2] + q->n[3] < 16) {
+		for (int j = 0; j < q->nb; j++)
+			trace_ready4(r, q->e + 4 * j, q->u + 4 * j, q->ok + 4 * j, q->seed + 4 * j, q->n[j],
+				     out + 4 * j);
+		return;
+	}
+	struct hit h[16];
+	bool hit[16];
+	accel_intersect16(r->accel, q->u, h, hit);
+	for (int j = 0; j < 4; j++) {
+		const struct hit *hp[4];
+		for (int k = 0; k < 4; k++) /* !ok: black, as shade_eye_hit of a miss */
+			hp[k] = q->ok[4 * j + k] && hit[4 * j + k] ? &h[4 * j + k] : NULL;
+		shade_eye_hit4(r->shade, q->u + 4 * j, hp, q->seed + 4 * j, 4, out + 4 * j);
+	}
+}
+
 /*
- * renderer_tile_cancellable for a filter_single_ray chain, in 2x2 blocks;
+ * renderer_tile_cancellable for a filter_single_ray chain, in 4x4 blocks;
  * stops at the first block that finds the thread's cancel flag set. The
  * next block's eye rays are made before this block is traced, so their
  * divisions and square roots run while this block's traversal does, not
@@ -264,19 +301,21 @@ static void tile_blocks(const struct renderer *r, struct tile_rect t, const stru
 			uint64_t *rays)
 {
 	struct block_walk w = { r, t, ps, rgb, 0, 0 };
-	struct eye_block b[2];
+	struct eye_quad q[2];
 	int cur = 0;
-	bool have = next_block(&w, &b[0]);
+	bool have = next_quad(&w, &q[0]);
 	while (have) {
 		if (cancel_poll())
 			return;
-		have = next_block(&w, &b[cur ^ 1]);
-		const struct eye_block *e = &b[cur];
-		vec3 c[4];
-		trace_ready4(r, e->e, e->u, e->ok, e->seed, e->n, c);
-		for (int k = 0; k < e->n; k++)
-			ps->put(c[k], e->dst[k]);
-		*rays += (uint64_t)e->n;
+		have = next_quad(&w, &q[cur ^ 1]);
+		const struct eye_quad *e = &q[cur];
+		vec3 c[16];
+		trace_quad(r, e, c);
+		for (int j = 0; j < e->nb; j++) {
+			for (int k = 0; k < e->n[j]; k++)
+				ps->put(c[4 * j + k], e->dst[4 * j + k]);
+			*rays += (uint64_t)e->n[j];
+		}
 		cur ^= 1;
 	}
 }
@@ -315,7 +354,7 @@ out:
 
 /*
  * The tile runs in a cancel scope of its own (cancel.h): besides the polls
- * here, one per 2x2 block or four pixels, the filters poll once per sample
+ * here, one per 4x4 block or four pixels, the filters poll once per sample
  * or packet, shading once per light of a shading point, and the traversal
  * when it enters an instance and every ACCEL_POLL_POPS subtrees, so one
  * pathological ray is abandoned too. Whatever they computed after a poll

@@ -12,7 +12,9 @@
  * Packets: accel_intersect4 gives every ray exactly accel_intersect's hit,
  * for four unrelated rays (mostly of different octants) and for four
  * neighbouring rays from one origin (the packet traversal), also with a
- * window (tmin > 0, finite tmax) and along an axis. The occlusion queries
+ * window (tmin > 0, finite tmax) and along an axis; accel_intersect16 as
+ * much for sixteen rays from one origin (four such packets), close
+ * together and spread wide, with a window, and with one origin moved. The occlusion queries
  * (accel_occluded4, accel_occluded_hint, with hints carried over or made
  * up) answer as accel_occluded for those packets and for four shadow rays
  * toward one point (tmax 1), and for packets whose lanes' directions
@@ -91,6 +93,44 @@ static void packet_check(struct job *j, const struct ray r[4])
 	occluded_check(j, r);
 }
 
+/* accel_intersect16 over r[0..16) against accel_intersect, ray by ray. */
+static void packet16_check(struct job *j, const struct ray r[16])
+{
+	struct hit h[16], h1;
+	bool hit[16];
+	accel_intersect16(j->a, r, h, hit);
+	j->packets++;
+	for (int i = 0; i < 16; i++) {
+		bool b1 = accel_intersect(j->a, &r[i], &h1);
+		if (!same_hit(b1, &h1, hit[i], &h[i])) {
+			j->packet_mismatch++;
+			return;
+		}
+	}
+}
+
+/* Sixteen neighbours from o around d, as a 4x4 block of pixels in four
+ * 2x2 packets (packet p at (2 (p & 1), 2 (p >> 1)), its ray l at (l & 1,
+ * l >> 1)), step apart; checked whole, with a window, and with one origin
+ * moved (each packet on its own). */
+static void fan16_check(struct job *j, vec3 o, vec3 d, double step, int k)
+{
+	struct ray f[16];
+	for (int i = 0; i < 16; i++) {
+		int p = i >> 2, l = i & 3;
+		double x = 2 * (p & 1) + (l & 1), y = 2 * (p >> 1) + (l >> 1);
+		f[i] = (struct ray){ o, v3_norm(v3_add(d, v3(step * (x - 1.5), step * (y - 1.5), 0))), 0, INFINITY };
+	}
+	packet16_check(j, f);
+	for (int i = 0; i < 16; i++) {
+		f[i].tmin = 0.3 * rng_uniform(j->seed, 16ull * k + i + 5000000);
+		f[i].tmax = f[i].tmin + 0.1 + 3 * rng_uniform(j->seed, 16ull * k + i + 6000000);
+	}
+	packet16_check(j, f);
+	f[9].o = v3_add(o, v3(1e-9, 0, 0));
+	packet16_check(j, f);
+}
+
 /* Rays [from, to): BVH, brute force and occlusion compared. */
 static void *run_rays(void *arg)
 {
@@ -110,6 +150,8 @@ static void *run_rays(void *arg)
 				fan[i] = (struct ray){ o, v3_norm(d), 0, INFINITY };
 			}
 			packet_check(j, fan);
+			/* sixteen from one origin: close, wide and wider than an octant */
+			fan16_check(j, o, r.d, k % 3 == 0 ? 1e-3 : k % 3 == 1 ? 3e-2 : 0.3, k);
 			for (int i = 0; i < 4; i++) { /* the same with a window: tmin > 0, finite tmax */
 				fan[i].tmin = 0.3 * rng_uniform(j->seed, 4ull * k + i);
 				fan[i].tmax = fan[i].tmin + 0.1 + 3 * rng_uniform(j->seed, 4ull * k + i + 2);
@@ -776,7 +818,9 @@ static void big_leaf(void)
  * margins: a grid of triangles (near the origin, and 1000 units away,
  * where floats are coarse) and packets of four rays from one origin aimed
  * at the grid's shared vertices and edge midpoints, exactly and off by
- * 1e-15 to 1e-7: every ray's hit is accel_intersect's, bit for bit.
+ * 1e-15 to 1e-7, and sixteen from one origin (accel_intersect16) aimed at
+ * four neighbouring such points: every ray's hit is accel_intersect's,
+ * bit for bit.
  */
 #define EDGE_GRID 6
 static void tri_margins(void)
@@ -801,7 +845,7 @@ static void tri_margins(void)
 				}
 		struct accel *a;
 		CHECK(accel_build(s, &a, &err) == 0);
-		int mismatch = 0, hits = 0;
+		int mismatch = 0, hits = 0, hits16 = 0;
 		static const double offs[] = { 0, 1e-15, 1e-12, 1e-9, 1e-7 };
 		for (int k = 0; k < 4000; k++) {
 			int i = (int)(rng_uniform(31, 3ull * k) * (EDGE_GRID + 1)), j = (int)(rng_uniform(31, 3ull * k + 1) * (EDGE_GRID + 1));
@@ -823,11 +867,28 @@ static void tri_margins(void)
 				mismatch += !same_hit(b1, &h1, hit4[l], &h4[l]);
 				hits += b1;
 			}
+			/* the same four, and three packets aimed at the neighbouring
+			 * vertices or midpoints, as one accel_intersect16 */
+			struct ray r16[16];
+			struct hit h16[16];
+			bool hit16[16];
+			for (int l = 0; l < 16; l++) {
+				vec3 tp = v3_add(target, v3(h * (l >> 2 & 1), h * (l >> 3), 0));
+				vec3 tl = v3_add(tp, v3(e * ((l & 1) ? 1 : -1), e * ((l & 2) ? 1 : -1), 0));
+				r16[l] = (struct ray){ o, v3_sub(tl, o), 0, INFINITY };
+			}
+			accel_intersect16(a, r16, h16, hit16);
+			for (int l = 0; l < 16; l++) {
+				bool b1 = accel_intersect(a, &r16[l], &h1);
+				mismatch += !same_hit(b1, &h1, hit16[l], &h16[l]);
+				hits16 += b1;
+			}
 		}
-		printf("triangle pre-test margins (%s): 16000 rays, %d hits, %d unlike single rays\n",
-		       far ? "1000 units away" : "at the origin", hits, mismatch);
+		printf("triangle pre-test margins (%s): 16000 rays in fours, 64000 in sixteens, %d and %d hits, %d unlike single rays\n",
+		       far ? "1000 units away" : "at the origin", hits, hits16, mismatch);
 		CHECK(mismatch == 0);
 		CHECK(hits > 8000);
+		CHECK(hits16 > 24000);
 		accel_free(a);
 		scene_free(s);
 	}
