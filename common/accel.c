@@ -449,7 +449,7 @@ void accel_finish(const struct accel *A, const struct group *g, const struct tra
 			h->n = h->ng = n;
 			h->mp = lp;
 			h->object = g->xp[i].obj;
-			h->material = scene_full_at(s, h->object)->material; /* an xprim: not an instance */
+			h->material = g->xp[i].mat;
 		}
 		break;
 	default:

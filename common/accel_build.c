@@ -724,6 +724,7 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 		struct xprim *xp = &g->xp[g->n_xp];
 		xp->g = A->gobj[oi];
 		xp->obj = oi;
+		xp->mat = scene_full_at(s, oi)->material; /* an xprim: not an instance */
 		ref = REF_MAKE(REF_XPRIM, g->n_xp++);
 		bx = csg_bounds(s, (struct geom_obj *const *)A->gobj, oi);
 		if (cancel_seen()) /* csg_bounds polls too (nested instances in CSG) */

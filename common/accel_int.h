@@ -70,6 +70,7 @@ struct gtri {
 struct xprim {
 	const struct geom_obj *g;
 	uint32_t obj;
+	uint32_t mat; /* the object's material (accel_finish reads no scene object) */
 };
 
 /* An instance: the index of its record in scene.insts, 4 bytes (issue
