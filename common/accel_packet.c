@@ -413,19 +413,19 @@ static inline __attribute__((always_inline)) void bvh_hit_o(const struct accel *
 			__m128 b2 = _mm_shuffle_ps(b, b, _MM_SHUFFLE(1, 0, 3, 2));
 			amin = _mm_min_ps(a, a2), amax = _mm_max_ps(a, a2);
 			bmin = _mm_min_ps(b, b2), bmax = _mm_max_ps(b, b2);
-		} else {
-			__m128 a0 = P[0].inv_near[k], a1 = P[1].inv_near[k], a2 = P[2].inv_near[k], a3 = P[3].inv_near[k];
-			__m128 b0 = P[0].inv_far[k], b1 = P[1].inv_far[k], b2 = P[2].inv_far[k], b3 = P[3].inv_far[k];
-			_MM_TRANSPOSE4_PS(a0, a1, a2, a3); /* lane j: packet j's ray 0, 1, 2, 3 */
-			_MM_TRANSPOSE4_PS(b0, b1, b2, b3);
-			snlo[k] = _mm_min_ps(_mm_min_ps(a0, a1), _mm_min_ps(a2, a3));
-			snhi[k] = _mm_max_ps(_mm_max_ps(a0, a1), _mm_max_ps(a2, a3));
-			sflo[k] = _mm_min_ps(_mm_min_ps(b0, b1), _mm_min_ps(b2, b3));
-			sfhi[k] = _mm_max_ps(_mm_max_ps(b0, b1), _mm_max_ps(b2, b3));
-			amin = _mm_min_ps(snlo[k], _mm_shuffle_ps(snlo[k], snlo[k], _MM_SHUFFLE(1, 0, 3, 2)));
-			amax = _mm_max_ps(snhi[k], _mm_shuffle_ps(snhi[k], snhi[k], _MM_SHUFFLE(1, 0, 3, 2)));
-			bmin = _mm_min_ps(sflo[k], _mm_shuffle_ps(sflo[k], sflo[k], _MM_SHUFFLE(1, 0, 3, 2)));
-			bmax = _mm_max_ps(sfhi[k], _mm_shuffle_ps(sfhi[k], sfhi[k], _MM_SHUFFLE(1, 0, 3, 2)));
+		} else { /* the per-packet lanes wait for the first leaf (SUB_SETUP) */
+			__m128 a = _mm_min_ps(_mm_min_ps(P[0].inv_near[k], P[1].inv_near[k]),
+					      _mm_min_ps(P[2].inv_near[k], P[3].inv_near[k]));
+			__m128 a_ = _mm_max_ps(_mm_max_ps(P[0].inv_near[k], P[1].inv_near[k]),
+					       _mm_max_ps(P[2].inv_near[k], P[3].inv_near[k]));
+			__m128 b = _mm_min_ps(_mm_min_ps(P[0].inv_far[k], P[1].inv_far[k]),
+					      _mm_min_ps(P[2].inv_far[k], P[3].inv_far[k]));
+			__m128 b_ = _mm_max_ps(_mm_max_ps(P[0].inv_far[k], P[1].inv_far[k]),
+					       _mm_max_ps(P[2].inv_far[k], P[3].inv_far[k]));
+			amin = _mm_min_ps(a, _mm_shuffle_ps(a, a, _MM_SHUFFLE(1, 0, 3, 2)));
+			amax = _mm_max_ps(a_, _mm_shuffle_ps(a_, a_, _MM_SHUFFLE(1, 0, 3, 2)));
+			bmin = _mm_min_ps(b, _mm_shuffle_ps(b, b, _MM_SHUFFLE(1, 0, 3, 2)));
+			bmax = _mm_max_ps(b_, _mm_shuffle_ps(b_, b_, _MM_SHUFFLE(1, 0, 3, 2)));
 		}
 		nlo[k] = _mm_min_ps(amin, _mm_shuffle_ps(amin, amin, _MM_SHUFFLE(2, 3, 0, 1)));
 		nhi[k] = _mm_max_ps(amax, _mm_shuffle_ps(amax, amax, _MM_SHUFFLE(2, 3, 0, 1)));
@@ -440,11 +440,36 @@ static inline __attribute__((always_inline)) void bvh_hit_o(const struct accel *
 		stmin = lanes_box_tmin(tr, P[0].tscale);
 		stmax = lanes_box_tmax(tr, P[0].tscale);
 	} else {
-		__m128 t0 = lanes_box_tmin(tr, P[0].tscale), t1 = lanes_box_tmin(tr + 4, P[1].tscale),
-		       t2 = lanes_box_tmin(tr + 8, P[2].tscale), t3 = lanes_box_tmin(tr + 12, P[3].tscale);
-		_MM_TRANSPOSE4_PS(t0, t1, t2, t3);
-		stmin = _mm_min_ps(_mm_min_ps(t0, t1), _mm_min_ps(t2, t3));
+		stmin = _mm_min_ps(_mm_min_ps(lanes_box_tmin(tr, P[0].tscale), lanes_box_tmin(tr + 4, P[1].tscale)),
+				   _mm_min_ps(lanes_box_tmin(tr + 8, P[2].tscale), lanes_box_tmin(tr + 12, P[3].tscale)));
+		stmax = _mm_max_ps(_mm_max_ps(lanes_box_tmax(tr, P[0].tscale), lanes_box_tmax(tr + 4, P[1].tscale)),
+				   _mm_max_ps(lanes_box_tmax(tr + 8, P[2].tscale), lanes_box_tmax(tr + 12, P[3].tscale)));
 	}
+	/* ng 4, at the first leaf: lane j packet j's least and greatest
+	 * inverses, tmin and tmax (stmin and stmax are the four packets' lanes
+	 * until then, what the least and greatest need) */
+	bool sub = false;
+#define SUB_SETUP()                                                                                        \
+	do {                                                                                               \
+		for (int k = 0; k < 3; k++) {                                                              \
+			__m128 a0 = P[0].inv_near[k], a1 = P[1].inv_near[k], a2 = P[2].inv_near[k],        \
+			       a3 = P[3].inv_near[k];                                                      \
+			__m128 b0 = P[0].inv_far[k], b1 = P[1].inv_far[k], b2 = P[2].inv_far[k],           \
+			       b3 = P[3].inv_far[k];                                                       \
+			_MM_TRANSPOSE4_PS(a0, a1, a2, a3); /* lane j: packet j's ray 0, 1, 2, 3 */         \
+			_MM_TRANSPOSE4_PS(b0, b1, b2, b3);                                                 \
+			snlo[k] = _mm_min_ps(_mm_min_ps(a0, a1), _mm_min_ps(a2, a3));                      \
+			snhi[k] = _mm_max_ps(_mm_max_ps(a0, a1), _mm_max_ps(a2, a3));                      \
+			sflo[k] = _mm_min_ps(_mm_min_ps(b0, b1), _mm_min_ps(b2, b3));                      \
+			sfhi[k] = _mm_max_ps(_mm_max_ps(b0, b1), _mm_max_ps(b2, b3));                      \
+		}                                                                                          \
+		__m128 t0 = lanes_box_tmin(tr, P[0].tscale), t1 = lanes_box_tmin(tr + 4, P[1].tscale),     \
+		       t2 = lanes_box_tmin(tr + 8, P[2].tscale), t3 = lanes_box_tmin(tr + 12, P[3].tscale);   \
+		_MM_TRANSPOSE4_PS(t0, t1, t2, t3);                                                         \
+		stmin = _mm_min_ps(_mm_min_ps(t0, t1), _mm_min_ps(t2, t3));                                \
+		PACKET_TMAX();                                                                             \
+		sub = true;                                                                                \
+	} while (0)
 #define PACKET_TMAX()                                                                                      \
 	do {                                                                                               \
 		if (ng == 1) {                                                                             \
@@ -456,8 +481,6 @@ static inline __attribute__((always_inline)) void bvh_hit_o(const struct accel *
 			stmax = _mm_max_ps(_mm_max_ps(u0, u1), _mm_max_ps(u2, u3));                        \
 		}                                                                                          \
 	} while (0)
-	if (ng > 1)
-		PACKET_TMAX();
 	tmin = lanes_min(stmin);
 	const __m128 tmin1 = _mm_set1_ps(tmin);
 	float tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), stmax)); /* the greatest */
@@ -475,6 +498,8 @@ static inline __attribute__((always_inline)) void bvh_hit_o(const struct accel *
 		if (n) {
 			unsigned gm = 1;
 			if (ng > 1) { /* the packets whose interval meets the leaf's box */
+				if (!sub)
+					SUB_SETUP();
 				const float *b = (const float *)(const void *)&nodes[from >> 2];
 				const uint32_t c = from & 3;
 				__m128 t0 = stmin, t1 = stmax;
@@ -545,6 +570,7 @@ static inline __attribute__((always_inline)) void bvh_hit_o(const struct accel *
 			from = stack[sp].from;
 	}
 #undef PACKET_TMAX
+#undef SUB_SETUP
 }
 
 /* bvh_hit_o for one packet, one copy per octant. */
