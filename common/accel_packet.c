@@ -1,12 +1,13 @@
 /*
- * accel_packet.c - packets of four rays through the root group's tree
- * (accel_intersect4, accel_occluded4): the closest-hit traversals bvh_hit4
- * (rays from anywhere) and bvh_hit4o (rays from one origin), the any-hit
- * traversal bvh_occluded4, and their set-up. Each ray of a packet gets
- * exactly the answer accel_intersect or accel_occluded gives it (CANONICAL
- * TIES, accel_trace.h); the single-ray queries, the hits' completion and
- * the design are in accel.c, what both share in accel_trace.h. Without
- * SSE2 the packet queries trace their rays one at a time.
+ * accel_packet.c - packets of rays through the root group's tree
+ * (accel_intersect4, accel_intersect16, accel_occluded4): the closest-hit
+ * traversals bvh_hit4 (four rays from anywhere) and bvh_hit_o (four or
+ * sixteen rays from one origin), the any-hit traversal bvh_occluded4, and
+ * their set-up. Each ray of a packet gets exactly the answer
+ * accel_intersect or accel_occluded gives it (CANONICAL TIES,
+ * accel_trace.h); the single-ray queries, the hits' completion and the
+ * design are in accel.c, what both share in accel_trace.h. Without SSE2
+ * the packet queries trace their rays one at a time.
  */
 #include "common/accel.h"
 
