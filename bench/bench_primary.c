@@ -1,12 +1,13 @@
 /*
  * bench_primary.c - the A/B figure for work on the tracing core: primary
  * rays (camera ray + closest hit, no shading) through every pixel centre,
- * made and traced as the renderer makes and traces them (4x4 blocks of
- * pixels as four 2x2 blocks, their rays from filter_eye_block when the
- * scene's filter is standard, through accel_intersect16; --2x2: each 2x2
- * block through accel_intersect4, as before the 4x4 blocks; without
- * filter_eye_block, or a size not a multiple of 4, 2x2 blocks; --single:
- * cam_ray and one accel_intersect per ray), one thread, the
+ * made and traced as the renderer makes and traces them (8x8 blocks of
+ * pixels as sixteen 2x2 blocks, their rays from filter_eye_block when the
+ * scene's filter is standard, through accel_intersect64; --4x4: 4x4 blocks
+ * through accel_intersect16; --2x2: each 2x2 block through
+ * accel_intersect4; without filter_eye_block, or a size not a multiple of
+ * the block's, 2x2 blocks; --single: cam_ray and one accel_intersect per
+ * ray), one thread, the
  * same frame traced FRAMES times; prints the best frame's
  * rate in Mrays/s of thread CPU time (repeatable to ~0.5% where the
  * wall-clock figures of bench_render wander by ~5%) and a hash of every hit
@@ -14,7 +15,7 @@
  * bit; it also checks that both ways give that same hash. docs/performance.md
  * says how to use it.
  *
- *   bench_primary [--single | --2x2] [SCENE [FRAMES [WIDTHxHEIGHT]]]
+ *   bench_primary [--single | --4x4 | --2x2] [SCENE [FRAMES [WIDTHxHEIGHT]]]
  *
  * Defaults: tests/data/spd/balls_s4.sce, 15 frames, 1280x960 (the issue 3
  * target's scene and size). Not a test: prints figures only.
@@ -108,34 +109,45 @@ static void frame_packets(const struct accel *a, const struct cam *c, const stru
 		*hash = h64;
 }
 
-/* The same frame in 4x4 blocks through accel_intersect16 (its 2x2 blocks
- * from filter_eye_block; the image's size a multiple of 4); the same hash. */
-static void frame_packets16(const struct accel *a, const struct cam *c, const struct filter_chain *fc, uint64_t *hash,
-			    struct hit *row4, bool *hit4)
+/* The same frame in side x side blocks (4: accel_intersect16, 8:
+ * accel_intersect64) of 2x2 blocks from filter_eye_block, in the
+ * renderer's order (render.c: 2x2 block b at (2 (b & 1) + 4 (b >> 2 & 1),
+ * 2 (b >> 1 & 1) + 4 (b >> 3))); the image's size a multiple of side; the
+ * same hash. */
+static void frame_big(const struct accel *a, const struct cam *c, const struct filter_chain *fc, uint32_t side,
+		      uint64_t *hash, struct hit *rows, bool *hits)
 {
 	uint64_t h64 = 1469598103934665603ull;
-	for (uint32_t y = 0; y + 3 < c->h; y += 4) {
-		for (uint32_t x = 0; x + 3 < c->w; x += 4) {
-			struct ray r[16];
-			struct hit h[16];
-			bool hit[16];
-			uint64_t seed[16];
-			for (int j = 0; j < 4; j++)
-				filter_eye_block(fc, x + 2 * (j & 1), y + 2 * (j >> 1), r + 4 * j, seed + 4 * j);
-			accel_intersect16(a, r, h, hit);
+	const int nb = (int)(side * side / 4);
+	for (uint32_t y = 0; y + side - 1 < c->h; y += side) {
+		for (uint32_t x = 0; x + side - 1 < c->w; x += side) {
+			struct ray r[64];
+			struct hit h[64];
+			bool hit[64];
+			uint64_t seed[64];
+			for (int b = 0; b < nb; b++) {
+				uint32_t bx = 2 * (b & 1) + 4 * (b >> 2 & 1), by = 2 * (b >> 1 & 1) + 4 * (b >> 3);
+				filter_eye_block(fc, x + bx, y + by, r + 4 * b, seed + 4 * b);
+			}
+			if (side == 8)
+				accel_intersect64(a, r, h, hit);
+			else
+				accel_intersect16(a, r, h, hit);
 			if (!hash)
 				continue;
-			for (uint32_t i = 0; i < 16; i++) {
-				uint32_t j = i >> 2, k = i & 3;
-				size_t at = (size_t)(2 * (j >> 1) + (k >> 1)) * c->w + x + 2 * (j & 1) + (k & 1);
-				row4[at] = h[i];
-				hit4[at] = hit[i];
+			for (int i = 0; i < 4 * nb; i++) {
+				int b = i >> 2, k = i & 3;
+				uint32_t px = 2 * (b & 1) + 4 * (b >> 2 & 1) + (k & 1);
+				uint32_t py = 2 * (b >> 1 & 1) + 4 * (b >> 3) + (k >> 1);
+				size_t at = (size_t)py * c->w + x + px;
+				rows[at] = h[i];
+				hits[at] = hit[i];
 			}
 		}
 		if (!hash)
 			continue;
-		for (size_t k = 0; k < 4 * (size_t)c->w; k++)
-			h64 = hash_hit(h64, hit4[k], &row4[k]);
+		for (size_t k = 0; k < side * (size_t)c->w; k++)
+			h64 = hash_hit(h64, hits[k], &rows[k]);
 	}
 	if (hash)
 		*hash = h64;
@@ -143,8 +155,10 @@ static void frame_packets16(const struct accel *a, const struct cam *c, const st
 
 int main(int argc, char **argv)
 {
-	bool p2x2 = argc > 1 && strcmp(argv[1], "--2x2") == 0;
-	if (p2x2) {
+
+	uint32_t side = 8; /* --4x4, --2x2: smaller blocks */
+	if (argc > 1 && (strcmp(argv[1], "--4x4") == 0 || strcmp(argv[1], "--2x2") == 0)) {
+		side = argv[1][2] == '4' ? 4 : 2;
 		argc--;
 		argv++;
 	}
@@ -157,7 +171,7 @@ int main(int argc, char **argv)
 	int frames;
 	unsigned w, h;
 	if (bs_args(argc, argv, 15, &path, &frames, &w, &h)) {
-		fprintf(stderr, "usage: bench_primary [--single | --2x2] [SCENE [FRAMES [WIDTHxHEIGHT]]]\n");
+		fprintf(stderr, "usage: bench_primary [--single | --4x4 | --2x2] [SCENE [FRAMES [WIDTHxHEIGHT]]]\n");
 		return 64;
 	}
 	struct scene *s;
@@ -177,8 +191,8 @@ int main(int argc, char **argv)
 		free(fc);
 		fc = NULL;
 	}
-	struct hit *row2 = malloc(4 * (size_t)w * sizeof *row2);
-	bool *hit2 = malloc(4 * (size_t)w * sizeof *hit2);
+	struct hit *row2 = malloc(8 * (size_t)w * sizeof *row2);
+	bool *hit2 = malloc(8 * (size_t)w * sizeof *hit2);
 	if (!row2 || !hit2) {
 		fprintf(stderr, "bench_primary: out of memory\n");
 		return 1;
@@ -186,9 +200,10 @@ int main(int argc, char **argv)
 	/* hashing costs time: frames of their own, untimed */
 	uint64_t hash = 0, hash_p = 0;
 	frame_single(a, &c, &hash);
-	bool p16 = !p2x2 && fc && w % 4 == 0 && h % 4 == 0;
-	if (p16)
-		frame_packets16(a, &c, fc, &hash_p, row2, hit2);
+	if (!fc || w % side || h % side)
+		side = 2;
+	if (side > 2)
+		frame_big(a, &c, fc, side, &hash_p, row2, hit2);
 	else
 		frame_packets(a, &c, fc, &hash_p, row2, hit2);
 	double best = INFINITY;
@@ -196,8 +211,8 @@ int main(int argc, char **argv)
 		double t0 = bs_cpu_now();
 		if (single)
 			frame_single(a, &c, NULL);
-		else if (p16)
-			frame_packets16(a, &c, fc, NULL, NULL, NULL);
+		else if (side > 2)
+			frame_big(a, &c, fc, side, NULL, NULL, NULL);
 		else
 			frame_packets(a, &c, fc, NULL, NULL, NULL);
 		double t = bs_cpu_now() - t0;
@@ -206,7 +221,8 @@ int main(int argc, char **argv)
 	printf("%s %ux%u: %.2f Mrays/s on 1 thread, %s (best of %d frames, thread CPU time); hits hash %016llx%s\n",
 	       path, w, h, (double)w * h / best * 1e-6,
 	       single ? "single rays"
-	       : p16  ? "4x4 packets, filter_eye_block"
+	       : side == 8 ? "8x8 blocks of 2x2 packets, filter_eye_block"
+	       : side == 4 ? "4x4 blocks of 2x2 packets, filter_eye_block"
 	       : fc   ? "2x2 packets, filter_eye_block"
 		      : "2x2 packets, cam_ray",
 	       frames,

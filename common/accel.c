@@ -33,8 +33,8 @@
  * binned SAH (bvh.c) collapsed to 4-wide nodes; traversal is iterative with
  * a fixed stack, nearest child first, and stops at the first hit for
  * accel_occluded. Packets of four rays (accel_intersect4, accel_occluded4,
- * accel_packet.c), and of sixteen from one origin (accel_intersect16),
- * share one walk of the root group's tree; a last-blocker hint
+ * accel_packet.c), and of 16 or 64 from one origin (accel_intersect16,
+ * accel_intersect64), share one walk of the root group's tree; a last-blocker hint
  * (accel_occluded_hint) is tested before the tree. Instances recurse into their define's group (depth
  * bounded by LIM_DEFINE_DEPTH); the closest hit is completed (normal, uv,
  * mp, material) once per group, in the group's space, then carried out

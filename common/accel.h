@@ -94,12 +94,14 @@ bool accel_intersect(const struct accel *a, const struct ray *r, struct hit *h);
  * see accel_trace.h). Faster when the rays are neighbours that visit the
  * same nodes, as the eye rays of a 2x2 block of pixels do. Thread-safe. */
 void accel_intersect4(const struct accel *a, const struct ray r[4], struct hit h[4], bool hit[4]);
-/* The closest hits of four packets of four rays (r[4 * j ...]: packet j):
- * each what accel_intersect gives, bit for bit. Faster than four
- * accel_intersect4 when the sixteen rays share one origin (the same bits),
- * as the eye rays of a 4x4 block of a pinhole camera do: the nodes are
- * tested once for all of them. Thread-safe. */
+/* The closest hits of four (sixteen) packets of four rays (r[4 * j ...]:
+ * packet j): each what accel_intersect gives, bit for bit. Faster than
+ * four accel_intersect4 (accel_intersect16) when the rays share one origin
+ * (the same bits), as the eye rays of a 4x4 (8x8) block of a pinhole
+ * camera do: the nodes are tested once for all of them, a leaf by each
+ * packet that may hit it. Thread-safe. */
 void accel_intersect16(const struct accel *a, const struct ray r[16], struct hit h[16], bool hit[16]);
+void accel_intersect64(const struct accel *a, const struct ray r[64], struct hit h[64], bool hit[64]);
 /* Completes h->u, h->v and h->mp of a hit that accel_intersect or
  * accel_intersect_brute returned with the same accel (the values are those
  * an eager computation gives, bit for bit); does nothing when they are

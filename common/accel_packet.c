@@ -1,8 +1,8 @@
 /*
  * accel_packet.c - packets of rays through the root group's tree
- * (accel_intersect4, accel_intersect16, accel_occluded4): the closest-hit
- * traversals bvh_hit4 (four rays from anywhere) and bvh_hit_o (four or
- * sixteen rays from one origin), the any-hit traversal bvh_occluded4, and
+ * (accel_intersect4, accel_intersect16, accel_intersect64,
+ * accel_occluded4): the closest-hit traversals bvh_hit4 (four rays from
+ * anywhere) and bvh_hit_o (4, 16 or 64 rays from one origin), the any-hit traversal bvh_occluded4, and
  * their set-up. Each ray of a packet gets exactly the answer
  * accel_intersect or accel_occluded gives it (CANONICAL TIES,
  * accel_trace.h); the single-ray queries, the hits' completion and the
@@ -383,118 +383,110 @@ static inline __attribute__((always_inline)) void bvh_hit4(const struct accel *A
 
 /*
  * bvh_hit4 for 4 * ng rays from one origin (the same floats in every P[j]->o
- * lane), ng packets of four (ng 1 or 4): each node's children are tested
- * against the rays as a whole, with the interval of the rays' inverses per
- * axis. The plane less the origin, d, is the same float for every ray, and
- * fl(d * x) is monotonic in x, so the smaller of d times the least and d
- * times the greatest inverse is the least entry distance over the rays on
- * that axis, exactly, and the larger of the far products the greatest exit;
- * with the least tmin and greatest tmax over the rays, a child that any
- * ray's own test (RAY_NODE) lets through passes. A subtree is popped while
- * its entry is within some ray's tmax. At a leaf each packet of four whose
- * own interval (the same test, lane j: packet j) meets the leaf's box, in
- * its parent node, is tested whole (the triangle pre-test and the exact
- * tests decide); with ng 1 that test is the node's, so it is not repeated.
+ * lane), ng packets of four (ng 1, 4 or 16): each node's children are
+ * tested against the rays as a whole, with the interval of the rays'
+ * inverses per axis. The plane less the origin, d, is the same float for
+ * every ray, and fl(d * x) is monotonic in x, so the smaller of d times the
+ * least and d times the greatest inverse is the least entry distance over
+ * the rays on that axis, exactly, and the larger of the far products the
+ * greatest exit; with the least tmin and greatest tmax over the rays, a
+ * child that any ray's own test (RAY_NODE) lets through passes. A subtree
+ * is popped while its entry is within some ray's tmax. At a leaf each
+ * packet of four whose own interval (the same test, in SIMD over four
+ * packets at a time) meets the leaf's box, in its parent node, is tested
+ * whole (the triangle pre-test and the exact tests decide); with ng 1 that
+ * test is the node's, so it is not repeated.
  */
 static inline __attribute__((always_inline)) void bvh_hit_o(const struct accel *A, const struct group *g,
 							    struct trace *tr, struct cand *best, bool *found,
 							    const struct ray4x *P, const uint32_t oct, const int ng)
 {
+	enum { NSMAX = 4 };
+	const int ns = ng / 4; /* groups of four packets (ng > 1) */
 	const struct bvh4 *nodes = g->bvh.nodes;
 	const uint32_t near[3] = { 12 * (oct & 1), 4 + 12 * (oct >> 1 & 1), 8 + 12 * (oct >> 2 & 1) };
 	const uint32_t far[3] = { 12 * (~oct & 1), 4 + 12 * (~oct >> 1 & 1), 8 + 12 * (~oct >> 2 & 1) };
-	/* lane j: packet j's least and greatest inverses (ng 4) */
-	__m128 o[3], nlo[3], nhi[3], flo[3], fhi[3], snlo[3], snhi[3], sflo[3], sfhi[3];
+	__m128 o[3], nlo[3], nhi[3], flo[3], fhi[3];
+	/* ng > 1, from the first leaf: lane j of group s packet 4 s + j's least
+	 * and greatest inverses, tmin and tmax */
+	__m128 snlo[NSMAX][3], snhi[NSMAX][3], sflo[NSMAX][3], sfhi[NSMAX][3], stmin[NSMAX], stmax[NSMAX];
 	for (int k = 0; k < 3; k++) {
 		o[k] = _mm_shuffle_ps(P[0].o[k], P[0].o[k], 0); /* the shared origin */
-		__m128 amin, amax, bmin, bmax;
-		if (ng == 1) {
-			__m128 a = P[0].inv_near[k], b = P[0].inv_far[k];
-			__m128 a2 = _mm_shuffle_ps(a, a, _MM_SHUFFLE(1, 0, 3, 2));
-			__m128 b2 = _mm_shuffle_ps(b, b, _MM_SHUFFLE(1, 0, 3, 2));
-			amin = _mm_min_ps(a, a2), amax = _mm_max_ps(a, a2);
-			bmin = _mm_min_ps(b, b2), bmax = _mm_max_ps(b, b2);
-		} else { /* the per-packet lanes wait for the first leaf (SUB_SETUP) */
-			__m128 a = _mm_min_ps(_mm_min_ps(P[0].inv_near[k], P[1].inv_near[k]),
-					      _mm_min_ps(P[2].inv_near[k], P[3].inv_near[k]));
-			__m128 a_ = _mm_max_ps(_mm_max_ps(P[0].inv_near[k], P[1].inv_near[k]),
-					       _mm_max_ps(P[2].inv_near[k], P[3].inv_near[k]));
-			__m128 b = _mm_min_ps(_mm_min_ps(P[0].inv_far[k], P[1].inv_far[k]),
-					      _mm_min_ps(P[2].inv_far[k], P[3].inv_far[k]));
-			__m128 b_ = _mm_max_ps(_mm_max_ps(P[0].inv_far[k], P[1].inv_far[k]),
-					       _mm_max_ps(P[2].inv_far[k], P[3].inv_far[k]));
-			amin = _mm_min_ps(a, _mm_shuffle_ps(a, a, _MM_SHUFFLE(1, 0, 3, 2)));
-			amax = _mm_max_ps(a_, _mm_shuffle_ps(a_, a_, _MM_SHUFFLE(1, 0, 3, 2)));
-			bmin = _mm_min_ps(b, _mm_shuffle_ps(b, b, _MM_SHUFFLE(1, 0, 3, 2)));
-			bmax = _mm_max_ps(b_, _mm_shuffle_ps(b_, b_, _MM_SHUFFLE(1, 0, 3, 2)));
+		__m128 a = P[0].inv_near[k], a_ = a, b = P[0].inv_far[k], b_ = b;
+		for (int j = 1; j < ng; j++) {
+			a = _mm_min_ps(a, P[j].inv_near[k]), a_ = _mm_max_ps(a_, P[j].inv_near[k]);
+			b = _mm_min_ps(b, P[j].inv_far[k]), b_ = _mm_max_ps(b_, P[j].inv_far[k]);
 		}
+		__m128 amin = _mm_min_ps(a, _mm_shuffle_ps(a, a, _MM_SHUFFLE(1, 0, 3, 2)));
+		__m128 amax = _mm_max_ps(a_, _mm_shuffle_ps(a_, a_, _MM_SHUFFLE(1, 0, 3, 2)));
+		__m128 bmin = _mm_min_ps(b, _mm_shuffle_ps(b, b, _MM_SHUFFLE(1, 0, 3, 2)));
+		__m128 bmax = _mm_max_ps(b_, _mm_shuffle_ps(b_, b_, _MM_SHUFFLE(1, 0, 3, 2)));
 		nlo[k] = _mm_min_ps(amin, _mm_shuffle_ps(amin, amin, _MM_SHUFFLE(2, 3, 0, 1)));
 		nhi[k] = _mm_max_ps(amax, _mm_shuffle_ps(amax, amax, _MM_SHUFFLE(2, 3, 0, 1)));
 		flo[k] = _mm_min_ps(bmin, _mm_shuffle_ps(bmin, bmin, _MM_SHUFFLE(2, 3, 0, 1)));
 		fhi[k] = _mm_max_ps(bmax, _mm_shuffle_ps(bmax, bmax, _MM_SHUFFLE(2, 3, 0, 1)));
 	}
-	/* the least tmin and greatest tmax: of all the rays, and (ng 4) lane j
-	 * packet j's */
-	__m128 stmin, stmax;
-	float tmin;
-	if (ng == 1) {
-		stmin = lanes_box_tmin(tr, P[0].tscale);
-		stmax = lanes_box_tmax(tr, P[0].tscale);
-	} else {
-		stmin = _mm_min_ps(_mm_min_ps(lanes_box_tmin(tr, P[0].tscale), lanes_box_tmin(tr + 4, P[1].tscale)),
-				   _mm_min_ps(lanes_box_tmin(tr + 8, P[2].tscale), lanes_box_tmin(tr + 12, P[3].tscale)));
-		stmax = _mm_max_ps(_mm_max_ps(lanes_box_tmax(tr, P[0].tscale), lanes_box_tmax(tr + 4, P[1].tscale)),
-				   _mm_max_ps(lanes_box_tmax(tr + 8, P[2].tscale), lanes_box_tmax(tr + 12, P[3].tscale)));
+	/* the least tmin and greatest tmax of all the rays */
+	__m128 gtmin = lanes_box_tmin(tr, P[0].tscale), gtmax = lanes_box_tmax(tr, P[0].tscale);
+	for (int j = 1; j < ng; j++) {
+		gtmin = _mm_min_ps(gtmin, lanes_box_tmin(tr + 4 * j, P[j].tscale));
+		gtmax = _mm_max_ps(gtmax, lanes_box_tmax(tr + 4 * j, P[j].tscale));
 	}
-	/* ng 4, at the first leaf: lane j packet j's least and greatest
-	 * inverses, tmin and tmax (stmin and stmax are the four packets' lanes
-	 * until then, what the least and greatest need) */
 	bool sub = false;
-#define SUB_SETUP()                                                                                        \
-	do {                                                                                               \
-		for (int k = 0; k < 3; k++) {                                                              \
-			__m128 a0 = P[0].inv_near[k], a1 = P[1].inv_near[k], a2 = P[2].inv_near[k],        \
-			       a3 = P[3].inv_near[k];                                                      \
-			__m128 b0 = P[0].inv_far[k], b1 = P[1].inv_far[k], b2 = P[2].inv_far[k],           \
-			       b3 = P[3].inv_far[k];                                                       \
-			_MM_TRANSPOSE4_PS(a0, a1, a2, a3); /* lane j: packet j's ray 0, 1, 2, 3 */         \
-			_MM_TRANSPOSE4_PS(b0, b1, b2, b3);                                                 \
-			snlo[k] = _mm_min_ps(_mm_min_ps(a0, a1), _mm_min_ps(a2, a3));                      \
-			snhi[k] = _mm_max_ps(_mm_max_ps(a0, a1), _mm_max_ps(a2, a3));                      \
-			sflo[k] = _mm_min_ps(_mm_min_ps(b0, b1), _mm_min_ps(b2, b3));                      \
-			sfhi[k] = _mm_max_ps(_mm_max_ps(b0, b1), _mm_max_ps(b2, b3));                      \
-		}                                                                                          \
-		__m128 t0 = lanes_box_tmin(tr, P[0].tscale), t1 = lanes_box_tmin(tr + 4, P[1].tscale),     \
-		       t2 = lanes_box_tmin(tr + 8, P[2].tscale), t3 = lanes_box_tmin(tr + 12, P[3].tscale);   \
-		_MM_TRANSPOSE4_PS(t0, t1, t2, t3);                                                         \
-		stmin = _mm_min_ps(_mm_min_ps(t0, t1), _mm_min_ps(t2, t3));                                \
-		PACKET_TMAX();                                                                             \
-		sub = true;                                                                                \
-	} while (0)
 #define PACKET_TMAX()                                                                                      \
 	do {                                                                                               \
 		if (ng == 1) {                                                                             \
-			stmax = lanes_box_tmax(tr, P[0].tscale);                                           \
+			gtmax = lanes_box_tmax(tr, P[0].tscale);                                           \
 		} else {                                                                                   \
-			__m128 u0 = lanes_box_tmax(tr, P[0].tscale), u1 = lanes_box_tmax(tr + 4, P[1].tscale),   \
-			       u2 = lanes_box_tmax(tr + 8, P[2].tscale), u3 = lanes_box_tmax(tr + 12, P[3].tscale); \
-			_MM_TRANSPOSE4_PS(u0, u1, u2, u3);                                                 \
-			stmax = _mm_max_ps(_mm_max_ps(u0, u1), _mm_max_ps(u2, u3));                        \
+			for (int s_ = 0; s_ < ns; s_++) {                                                  \
+				const int j_ = 4 * s_;                                                     \
+				__m128 u0 = lanes_box_tmax(tr + 4 * j_, P[j_].tscale),                     \
+				       u1 = lanes_box_tmax(tr + 4 * j_ + 4, P[j_ + 1].tscale),             \
+				       u2 = lanes_box_tmax(tr + 4 * j_ + 8, P[j_ + 2].tscale),             \
+				       u3 = lanes_box_tmax(tr + 4 * j_ + 12, P[j_ + 3].tscale);            \
+				_MM_TRANSPOSE4_PS(u0, u1, u2, u3);                                         \
+				stmax[s_] = _mm_max_ps(_mm_max_ps(u0, u1), _mm_max_ps(u2, u3));            \
+				gtmax = s_ ? _mm_max_ps(gtmax, stmax[s_]) : stmax[s_];                     \
+			}                                                                                  \
 		}                                                                                          \
 	} while (0)
-	tmin = lanes_min(stmin);
-	const __m128 tmin1 = _mm_set1_ps(tmin);
-	float tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), stmax)); /* the greatest */
+#define SUB_SETUP()                                                                                        \
+	do {                                                                                               \
+		for (int s_ = 0; s_ < ns; s_++) {                                                          \
+			const struct ray4x *Q = P + 4 * s_;                                                \
+			for (int k = 0; k < 3; k++) {                                                      \
+				__m128 a0 = Q[0].inv_near[k], a1 = Q[1].inv_near[k], a2 = Q[2].inv_near[k], \
+				       a3 = Q[3].inv_near[k];                                              \
+				__m128 b0 = Q[0].inv_far[k], b1 = Q[1].inv_far[k], b2 = Q[2].inv_far[k],   \
+				       b3 = Q[3].inv_far[k];                                               \
+				_MM_TRANSPOSE4_PS(a0, a1, a2, a3); /* lane j: packet j's ray 0..3 */        \
+				_MM_TRANSPOSE4_PS(b0, b1, b2, b3);                                         \
+				snlo[s_][k] = _mm_min_ps(_mm_min_ps(a0, a1), _mm_min_ps(a2, a3));          \
+				snhi[s_][k] = _mm_max_ps(_mm_max_ps(a0, a1), _mm_max_ps(a2, a3));          \
+				sflo[s_][k] = _mm_min_ps(_mm_min_ps(b0, b1), _mm_min_ps(b2, b3));          \
+				sfhi[s_][k] = _mm_max_ps(_mm_max_ps(b0, b1), _mm_max_ps(b2, b3));          \
+			}                                                                                  \
+			const struct trace *T = tr + 16 * s_;                                              \
+			__m128 t0 = lanes_box_tmin(T, Q[0].tscale), t1 = lanes_box_tmin(T + 4, Q[1].tscale), \
+			       t2 = lanes_box_tmin(T + 8, Q[2].tscale), t3 = lanes_box_tmin(T + 12, Q[3].tscale); \
+			_MM_TRANSPOSE4_PS(t0, t1, t2, t3);                                                 \
+			stmin[s_] = _mm_min_ps(_mm_min_ps(t0, t1), _mm_min_ps(t2, t3));                    \
+		}                                                                                          \
+		PACKET_TMAX();                                                                             \
+		sub = true;                                                                                \
+	} while (0)
+	const __m128 tmin1 = _mm_set1_ps(lanes_min(gtmin));
+	float tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), gtmax)); /* the greatest */
 	struct {
 		float t; /* the rays' least entry distance */
 		uint32_t idx, n;
-		uint32_t from; /* ng 4: the parent node's index * 4 + the child's slot */
+		uint32_t from; /* ng > 1: the parent node's index * 4 + the child's slot */
 	} stack[3 * BVH_MAX_DEPTH + 4];
 	int sp = 0;
 	uint32_t idx = 0, n = 0, from = 0;
 	uint32_t polls = ACCEL_POLL_POPS;
-	struct tri4 q[4]; /* TRIANGLE PRE-TEST per packet, set up at the first leaf that needs it */
-	bool q_ready[4] = { false, false, false, false };
+	struct tri4 q[16]; /* TRIANGLE PRE-TEST per packet, set up at the first leaf that needs it */
+	uint32_t q_ready = 0; /* bit j: q[j] */
 	for (;;) {
 		if (n) {
 			unsigned gm = 1;
@@ -503,26 +495,35 @@ static inline __attribute__((always_inline)) void bvh_hit_o(const struct accel *
 					SUB_SETUP();
 				const float *b = (const float *)(const void *)&nodes[from >> 2];
 				const uint32_t c = from & 3;
-				__m128 t0 = stmin, t1 = stmax;
+				__m128 dn[3], df[3];
 				for (int k = 0; k < 3; k++) {
-					__m128 dn = _mm_sub_ps(_mm_set1_ps(b[near[k] + c]), o[k]);
-					__m128 df = _mm_sub_ps(_mm_set1_ps(b[far[k] + c]), o[k]);
-					t0 = _mm_max_ps(t0, _mm_min_ps(_mm_mul_ps(dn, snlo[k]), _mm_mul_ps(dn, snhi[k])));
-					t1 = _mm_min_ps(t1, _mm_max_ps(_mm_mul_ps(df, sflo[k]), _mm_mul_ps(df, sfhi[k])));
+					dn[k] = _mm_sub_ps(_mm_set1_ps(b[near[k] + c]), o[k]);
+					df[k] = _mm_sub_ps(_mm_set1_ps(b[far[k] + c]), o[k]);
 				}
-				gm = (unsigned)_mm_movemask_ps(_mm_cmple_ps(t0, t1));
+				gm = 0;
+				for (int s_ = 0; s_ < ns; s_++) {
+					__m128 t0 = stmin[s_], t1 = stmax[s_];
+					for (int k = 0; k < 3; k++) {
+						t0 = _mm_max_ps(t0, _mm_min_ps(_mm_mul_ps(dn[k], snlo[s_][k]),
+									       _mm_mul_ps(dn[k], snhi[s_][k])));
+						t1 = _mm_min_ps(t1, _mm_max_ps(_mm_mul_ps(df[k], sflo[s_][k]),
+									       _mm_mul_ps(df[k], sfhi[s_][k])));
+					}
+					gm |= (unsigned)_mm_movemask_ps(_mm_cmple_ps(t0, t1)) << (4 * s_);
+				}
 			}
 			for (; gm; gm &= gm - 1) {
 				int j = __builtin_ctz(gm);
+				bool qr = q_ready >> j & 1;
 				if (n & LEAF_BLOCK)
 					leaf4_block(g, tr + 4 * j, best + 4 * j, found + 4 * j, &g->tblk[idx],
-						    n & ~LEAF_BLOCK, 15, &q[j], &q_ready[j]);
+						    n & ~LEAF_BLOCK, 15, &q[j], &qr);
 				else
-					leaf4(A, g, tr + 4 * j, best + 4 * j, found + 4 * j, idx, n, 15, &q[j],
-					      &q_ready[j]);
+					leaf4(A, g, tr + 4 * j, best + 4 * j, found + 4 * j, idx, n, 15, &q[j], &qr);
+				q_ready |= (uint32_t)qr << j;
 			}
 			PACKET_TMAX();
-			tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), stmax));
+			tmax = -lanes_min(_mm_sub_ps(_mm_setzero_ps(), gtmax));
 		} else {
 			const struct bvh4 *nd = &nodes[idx];
 			const float *b = (const float *)(const void *)nd; /* rows as in node4_hit */
@@ -607,6 +608,23 @@ static __attribute__((noinline)) void group_hit16o(const struct accel *A, const 
 	}
 }
 
+/* bvh_hit_o for sixteen packets, one copy per octant. */
+static __attribute__((noinline)) void group_hit64o(const struct accel *A, const struct group *g, struct trace tr[64],
+						   struct cand best[64], bool found[64], const struct ray4x P[16],
+						   uint32_t oct)
+{
+	switch (oct) {
+	case 0: bvh_hit_o(A, g, tr, best, found, P, 0, 16); break;
+	case 1: bvh_hit_o(A, g, tr, best, found, P, 1, 16); break;
+	case 2: bvh_hit_o(A, g, tr, best, found, P, 2, 16); break;
+	case 3: bvh_hit_o(A, g, tr, best, found, P, 3, 16); break;
+	case 4: bvh_hit_o(A, g, tr, best, found, P, 4, 16); break;
+	case 5: bvh_hit_o(A, g, tr, best, found, P, 5, 16); break;
+	case 6: bvh_hit_o(A, g, tr, best, found, P, 6, 16); break;
+	default: bvh_hit_o(A, g, tr, best, found, P, 7, 16); break;
+	}
+}
+
 /* group_hit for four rays of one octant through g's tree (g->bvh.n_nodes4). */
 static void group_hit4(const struct accel *A, const struct group *g, struct trace tr[4], uint32_t oct,
 		       struct hit h[4], bool hit[4])
@@ -672,6 +690,28 @@ static void group_hit16(const struct accel *A, const struct group *g, struct tra
 		ray_box4(tr + 4 * j, g->center, &P[j]);
 	group_hit16o(A, g, tr, best, found, P, oct);
 	for (int i = 0; i < 16; i++) {
+		hit[i] = found[i];
+		if (found[i])
+			accel_finish(A, g, &tr[i], &best[i], &h[i]);
+	}
+}
+
+/* group_hit16 for sixteen packets of four rays from one origin and of one
+ * octant. */
+static void group_hit64(const struct accel *A, const struct group *g, struct trace tr[64], uint32_t oct,
+			struct hit h[64], bool hit[64])
+{
+	struct cand best[64];
+	bool found[64];
+	struct ray4x P[16];
+	for (int i = 0; i < 64; i++) {
+		cand_init(&best[i]);
+		found[i] = group_hit_unbounded(A, g, &tr[i], &best[i], false);
+	}
+	for (int j = 0; j < 16; j++)
+		ray_box4(tr + 4 * j, g->center, &P[j]);
+	group_hit64o(A, g, tr, best, found, P, oct);
+	for (int i = 0; i < 64; i++) {
 		hit[i] = found[i];
 		if (found[i])
 			accel_finish(A, g, &tr[i], &best[i], &h[i]);
@@ -887,6 +927,25 @@ void accel_intersect16(const struct accel *a, const struct ray r[16], struct hit
 #endif
 	for (int j = 0; j < 4; j++)
 		accel_intersect4(a, r + 4 * j, h + 4 * j, hit + 4 * j);
+}
+
+void accel_intersect64(const struct accel *a, const struct ray r[64], struct hit h[64], bool hit[64])
+{
+#if defined(__SSE2__)
+	struct trace tr[64];
+	uint32_t oct[16];
+	bool one = true; /* one origin (the same bits), one octant: the whole-packet traversal */
+	for (int i = 1; i < 64 && one; i++)
+		one = memcmp(&r[i].o, &r[0].o, sizeof r[0].o) == 0;
+	for (int j = 0; j < 16 && one; j++)
+		one = packet_start(a, r + 4 * j, tr + 4 * j, &oct[j]) && oct[j] == oct[0];
+	if (one) {
+		group_hit64(a, a->root, tr, oct[0], h, hit);
+		return;
+	}
+#endif
+	for (int j = 0; j < 4; j++)
+		accel_intersect16(a, r + 16 * j, h + 16 * j, hit + 16 * j);
 }
 
 void accel_occluded4(const struct accel *a, const struct ray r[4], bool occ[4], uint32_t *hint)

@@ -4,11 +4,12 @@
  * The same code runs in the master (locally) and in every worker: a tile is
  * a rectangle of pixels, each pixel's colour comes from filter_pixel over
  * shade_trace, so it depends on the scene and the pixel alone. With one eye
- * ray per pixel (filter standard), the tile goes in 4x4 blocks whose
- * eye rays find their closest hits together (accel_intersect16: the same
- * hits, faster), shaded as four 2x2 blocks whose shadow rays toward each
- * point light go together too (shade_eye_hit4); each pixel gets exactly
- * the colour filter_pixel would give. Other filters trace super-sample grids and adaptive corners four
+ * ray per pixel (filter standard), the tile goes in 8x8 blocks whose
+ * eye rays find their closest hits together (accel_intersect64, or
+ * accel_intersect16 for the 4x4 blocks of one cut by an edge: the same
+ * hits, faster), shaded as 2x2 blocks whose shadow rays toward each point
+ * light go together too (shade_eye_hit4); each pixel gets exactly the
+ * colour filter_pixel would give. Other filters trace super-sample grids and adaptive corners four
  * rays at a time the same way (filter_pixels4 over trace_shade4), a grid's
  * packets running across four pixels of a row.
  */
@@ -187,39 +188,40 @@ static void put_rgbf32(vec3 c, uint8_t *out)
 }
 
 /*
- * A 4x4 block of a tile for a filter_single_ray chain, as up to four 2x2
- * blocks (block j at 4 * j in the arrays): each one's n[j] pixels inside
- * the image, in order, where their colours go, and their eye rays
+ * An 8x8 block of a tile for a filter_single_ray chain, as sixteen 2x2
+ * blocks: block b (pixels at 4 * b in the arrays) lies at (2 (b & 1) +
+ * 4 (b >> 2 & 1), 2 (b >> 1 & 1) + 4 (b >> 3)), so blocks 4 s to 4 s + 3
+ * make the 4x4 block s. Each has its n[b] pixels inside the tile and the
+ * image (0: none), in order, where their colours go, and their eye rays
  * (filter_eye_block, filter_eye_ray4) made ready for trace_ready4; traced
  * there, each colour is what filter_pixel over trace_shade gives.
  */
-struct eye_quad {
-	int nb;
-	int n[4];
-	uint8_t *dst[16];
-	struct ray e[16], u[16];
-	bool ok[16];
-	uint64_t seed[16];
+struct eye_oct {
+	int n[16];
+	int total;
+	uint8_t *dst[64];
+	struct ray e[64], u[64];
+	bool ok[64];
+	uint64_t seed[64];
 };
 
-/* Walk over a tile's 4x4 blocks, row by row. */
+/* Walk over a tile's 8x8 blocks, row by row. */
 struct block_walk {
 	const struct renderer *r;
 	struct tile_rect t;
 	const struct pixel_store *ps;
 	uint8_t *rgb;
-	uint32_t i, j; /* the next 4x4 block's top-left pixel in the tile */
+	uint32_t i, j; /* the next 8x8 block's top-left pixel in the tile */
 };
 
-/* The 2x2 block at tile pixel (i, j) as q's next block, unless it has no
- * pixel inside the tile and the image (the tile's pixels outside the image
- * on the way written black). */
-static void add_block(const struct block_walk *w, uint32_t i, uint32_t j, struct eye_quad *q)
+/* The 2x2 block at tile pixel (i, j) as q's block b (the tile's pixels
+ * outside the image on the way written black). */
+static void add_block(const struct block_walk *w, uint32_t i, uint32_t j, struct eye_oct *q, int b)
 {
 	const struct renderer *r = w->r;
 	struct tile_rect t = w->t;
 	size_t bpp = w->ps->bpp;
-	const int at = 4 * q->nb;
+	const int at = 4 * b;
 	uint32_t px[4], py[4];
 	int n = 0;
 	for (uint32_t k = 0; k < 4; k++) {
@@ -236,62 +238,79 @@ static void add_block(const struct block_walk *w, uint32_t i, uint32_t j, struct
 		py[n] = (uint32_t)y;
 		q->dst[at + n++] = p;
 	}
-	if (n == 0)
-		return;
-	q->n[q->nb++] = n;
+	q->n[b] = n;
+	q->total += n;
 	if (n == 4) /* the whole block: its columns and rows shared */
 		filter_eye_block(&r->fc, px[0], py[0], q->e + at, q->seed + at);
-	else
+	else if (n)
 		filter_eye_ray4(&r->fc, px, py, n, q->e + at, q->seed + at);
 	if (n >= PACKET_MIN_RAYS)
 		shade_eye_rays4(q->e + at, n, q->u + at, q->ok + at);
 }
 
-/* The next 4x4 block with a pixel inside the image into q; false at the
+/* The next 8x8 block with a pixel inside the image into q; false at the
  * tile's end. */
-static bool next_quad(struct block_walk *w, struct eye_quad *q)
+static bool next_oct(struct block_walk *w, struct eye_oct *q)
 {
 	struct tile_rect t = w->t;
 	while (w->j < t.h) {
 		uint32_t i = w->i, j = w->j;
-		w->i += 4;
+		w->i += 8;
 		if (w->i >= t.w) {
 			w->i = 0;
-			w->j += 4;
+			w->j += 8;
 		}
-		q->nb = 0;
-		for (uint32_t k = 0; k < 4; k++)
-			add_block(w, i + 2 * (k & 1), j + 2 * (k >> 1), q);
-		if (q->nb)
+		q->total = 0;
+		for (int b = 0; b < 16; b++)
+			add_block(w, i + 2 * (b & 1) + 4 * (b >> 2 & 1), j + 2 * (b >> 1 & 1) + 4 * (b >> 3), q, b);
+		if (q->total)
 			return true;
 	}
 	return false;
 }
 
-/* The colours of q's pixels (block j's at 4 * j): a whole 4x4 block's
- * closest hits from one accel_intersect16, shaded block by block; any
- * other's block by block through trace_ready4. */
-static void trace_quad(const struct renderer *r, const struct eye_quad *q, vec3 out[16])
+/* Shades q's 2x2 blocks from..to - 1, whole ones, from their hits h (block
+ * b's at 4 * b). */
+static void shade_blocks(const struct renderer *r, const struct eye_oct *q, int from, int to, const struct hit *h,
+			 const bool *hit, vec3 out[64])
 {
-	if (q->nb < 4 || q->n[0] + q->n[1] + q->n[2] + q->n[3] < 16) {
-		for (int j = 0; j < q->nb; j++)
-			trace_ready4(r, q->e + 4 * j, q->u + 4 * j, q->ok + 4 * j, q->seed + 4 * j, q->n[j],
-				     out + 4 * j);
-		return;
-	}
-	struct hit h[16];
-	bool hit[16];
-	accel_intersect16(r->accel, q->u, h, hit);
-	for (int j = 0; j < 4; j++) {
+	for (int b = from; b < to; b++) {
 		const struct hit *hp[4];
 		for (int k = 0; k < 4; k++) /* !ok: black, as shade_eye_hit of a miss */
-			hp[k] = q->ok[4 * j + k] && hit[4 * j + k] ? &h[4 * j + k] : NULL;
-		shade_eye_hit4(r->shade, q->u + 4 * j, hp, q->seed + 4 * j, 4, out + 4 * j);
+			hp[k] = q->ok[4 * b + k] && hit[4 * b + k] ? &h[4 * b + k] : NULL;
+		shade_eye_hit4(r->shade, q->u + 4 * b, hp, q->seed + 4 * b, 4, out + 4 * b);
+	}
+}
+
+/* The colours of q's pixels (block b's at 4 * b): a whole 8x8 block's
+ * closest hits from one accel_intersect64, a whole 4x4 block's from one
+ * accel_intersect16, each shaded 2x2 block by 2x2 block; any other 2x2
+ * block through trace_ready4. */
+static void trace_oct(const struct renderer *r, const struct eye_oct *q, vec3 out[64])
+{
+	struct hit h[64];
+	bool hit[64];
+	if (q->total == 64) {
+		accel_intersect64(r->accel, q->u, h, hit);
+		shade_blocks(r, q, 0, 16, h, hit, out);
+		return;
+	}
+	for (int s4 = 0; s4 < 4; s4++) {
+		const int b0 = 4 * s4;
+		if (q->n[b0] + q->n[b0 + 1] + q->n[b0 + 2] + q->n[b0 + 3] == 16) {
+			accel_intersect16(r->accel, q->u + 4 * b0, h + 4 * b0, hit + 4 * b0);
+			shade_blocks(r, q, b0, b0 + 4, h, hit, out);
+			continue;
+		}
+		for (int b = b0; b < b0 + 4; b++)
+			if (q->n[b])
+				trace_ready4(r, q->e + 4 * b, q->u + 4 * b, q->ok + 4 * b, q->seed + 4 * b, q->n[b],
+					     out + 4 * b);
 	}
 }
 
 /*
- * renderer_tile_cancellable for a filter_single_ray chain, in 4x4 blocks;
+ * renderer_tile_cancellable for a filter_single_ray chain, in 8x8 blocks;
  * stops at the first block that finds the thread's cancel flag set. The
  * next block's eye rays are made before this block is traced, so their
  * divisions and square roots run while this block's traversal does, not
@@ -301,21 +320,20 @@ static void tile_blocks(const struct renderer *r, struct tile_rect t, const stru
 			uint64_t *rays)
 {
 	struct block_walk w = { r, t, ps, rgb, 0, 0 };
-	struct eye_quad q[2];
+	struct eye_oct q[2];
 	int cur = 0;
-	bool have = next_quad(&w, &q[0]);
+	bool have = next_oct(&w, &q[0]);
 	while (have) {
 		if (cancel_poll())
 			return;
-		have = next_quad(&w, &q[cur ^ 1]);
-		const struct eye_quad *e = &q[cur];
-		vec3 c[16];
-		trace_quad(r, e, c);
-		for (int j = 0; j < e->nb; j++) {
-			for (int k = 0; k < e->n[j]; k++)
-				ps->put(c[4 * j + k], e->dst[4 * j + k]);
-			*rays += (uint64_t)e->n[j];
-		}
+		have = next_oct(&w, &q[cur ^ 1]);
+		const struct eye_oct *e = &q[cur];
+		vec3 c[64];
+		trace_oct(r, e, c);
+		for (int b = 0; b < 16; b++)
+			for (int k = 0; k < e->n[b]; k++)
+				ps->put(c[4 * b + k], e->dst[4 * b + k]);
+		*rays += (uint64_t)e->total;
 		cur ^= 1;
 	}
 }
@@ -354,7 +372,7 @@ out:
 
 /*
  * The tile runs in a cancel scope of its own (cancel.h): besides the polls
- * here, one per 4x4 block or four pixels, the filters poll once per sample
+ * here, one per 8x8 block or four pixels, the filters poll once per sample
  * or packet, shading once per light of a shading point, and the traversal
  * when it enters an instance and every ACCEL_POLL_POPS subtrees, so one
  * pathological ray is abandoned too. Whatever they computed after a poll

@@ -12,9 +12,10 @@
  * Packets: accel_intersect4 gives every ray exactly accel_intersect's hit,
  * for four unrelated rays (mostly of different octants) and for four
  * neighbouring rays from one origin (the packet traversal), also with a
- * window (tmin > 0, finite tmax) and along an axis; accel_intersect16 as
- * much for sixteen rays from one origin (four such packets), close
- * together and spread wide, with a window, and with one origin moved. The occlusion queries
+ * window (tmin > 0, finite tmax) and along an axis; accel_intersect16 and
+ * accel_intersect64 as much for sixteen and sixty-four rays from one
+ * origin (four or sixteen such packets), close together and spread wide,
+ * with a window, and with one origin moved. The occlusion queries
  * (accel_occluded4, accel_occluded_hint, with hints carried over or made
  * up) answer as accel_occluded for those packets and for four shadow rays
  * toward one point (tmax 1), and for packets whose lanes' directions
@@ -93,14 +94,18 @@ static void packet_check(struct job *j, const struct ray r[4])
 	occluded_check(j, r);
 }
 
-/* accel_intersect16 over r[0..16) against accel_intersect, ray by ray. */
-static void packet16_check(struct job *j, const struct ray r[16])
+/* accel_intersect16 (np 4) or accel_intersect64 (np 16) over r[0..4 np)
+ * against accel_intersect, ray by ray. */
+static void packets_check(struct job *j, const struct ray *r, int np)
 {
-	struct hit h[16], h1;
-	bool hit[16];
-	accel_intersect16(j->a, r, h, hit);
+	struct hit h[64], h1;
+	bool hit[64];
+	if (np == 16)
+		accel_intersect64(j->a, r, h, hit);
+	else
+		accel_intersect16(j->a, r, h, hit);
 	j->packets++;
-	for (int i = 0; i < 16; i++) {
+	for (int i = 0; i < 4 * np; i++) {
 		bool b1 = accel_intersect(j->a, &r[i], &h1);
 		if (!same_hit(b1, &h1, hit[i], &h[i])) {
 			j->packet_mismatch++;
@@ -109,26 +114,28 @@ static void packet16_check(struct job *j, const struct ray r[16])
 	}
 }
 
-/* Sixteen neighbours from o around d, as a 4x4 block of pixels in four
- * 2x2 packets (packet p at (2 (p & 1), 2 (p >> 1)), its ray l at (l & 1,
- * l >> 1)), step apart; checked whole, with a window, and with one origin
- * moved (each packet on its own). */
-static void fan16_check(struct job *j, vec3 o, vec3 d, double step, int k)
+/* 4 np neighbours from o around d (np 4 or 16 packets of four), as a 4x4 or
+ * 8x8 block of pixels in 2x2 packets (packet p at (2 (p & 1) + 4 (p >> 2 &
+ * 1), 2 (p >> 1 & 1) + 4 (p >> 3)), its ray l at (l & 1, l >> 1), as the
+ * renderer orders them), step apart; checked whole, with a window, and with
+ * one origin moved (then in smaller packets). */
+static void fan_check(struct job *j, vec3 o, vec3 d, double step, int k, int np)
 {
-	struct ray f[16];
-	for (int i = 0; i < 16; i++) {
+	struct ray f[64];
+	const double mid = np == 16 ? 3.5 : 1.5;
+	for (int i = 0; i < 4 * np; i++) {
 		int p = i >> 2, l = i & 3;
-		double x = 2 * (p & 1) + (l & 1), y = 2 * (p >> 1) + (l >> 1);
-		f[i] = (struct ray){ o, v3_norm(v3_add(d, v3(step * (x - 1.5), step * (y - 1.5), 0))), 0, INFINITY };
+		double x = 2 * (p & 1) + 4 * (p >> 2 & 1) + (l & 1), y = 2 * (p >> 1 & 1) + 4 * (p >> 3) + (l >> 1);
+		f[i] = (struct ray){ o, v3_norm(v3_add(d, v3(step * (x - mid), step * (y - mid), 0))), 0, INFINITY };
 	}
-	packet16_check(j, f);
-	for (int i = 0; i < 16; i++) {
-		f[i].tmin = 0.3 * rng_uniform(j->seed, 16ull * k + i + 5000000);
-		f[i].tmax = f[i].tmin + 0.1 + 3 * rng_uniform(j->seed, 16ull * k + i + 6000000);
+	packets_check(j, f, np);
+	for (int i = 0; i < 4 * np; i++) {
+		f[i].tmin = 0.3 * rng_uniform(j->seed, 64ull * k + i + 5000000);
+		f[i].tmax = f[i].tmin + 0.1 + 3 * rng_uniform(j->seed, 64ull * k + i + 6000000);
 	}
-	packet16_check(j, f);
-	f[9].o = v3_add(o, v3(1e-9, 0, 0));
-	packet16_check(j, f);
+	packets_check(j, f, np);
+	f[4 * np - 7].o = v3_add(o, v3(1e-9, 0, 0));
+	packets_check(j, f, np);
 }
 
 /* Rays [from, to): BVH, brute force and occlusion compared. */
@@ -151,7 +158,8 @@ static void *run_rays(void *arg)
 			}
 			packet_check(j, fan);
 			/* sixteen from one origin: close, wide and wider than an octant */
-			fan16_check(j, o, r.d, k % 3 == 0 ? 1e-3 : k % 3 == 1 ? 3e-2 : 0.3, k);
+			fan_check(j, o, r.d, k % 3 == 0 ? 1e-3 : k % 3 == 1 ? 3e-2 : 0.3, k, 4);
+			fan_check(j, o, r.d, k % 3 == 0 ? 1e-3 : k % 3 == 1 ? 1e-2 : 0.15, k, 16);
 			for (int i = 0; i < 4; i++) { /* the same with a window: tmin > 0, finite tmax */
 				fan[i].tmin = 0.3 * rng_uniform(j->seed, 4ull * k + i);
 				fan[i].tmax = fan[i].tmin + 0.1 + 3 * rng_uniform(j->seed, 4ull * k + i + 2);
@@ -818,9 +826,10 @@ static void big_leaf(void)
  * margins: a grid of triangles (near the origin, and 1000 units away,
  * where floats are coarse) and packets of four rays from one origin aimed
  * at the grid's shared vertices and edge midpoints, exactly and off by
- * 1e-15 to 1e-7, and sixteen from one origin (accel_intersect16) aimed at
- * four neighbouring such points: every ray's hit is accel_intersect's,
- * bit for bit.
+ * 1e-15 to 1e-7, and sixteen and sixty-four from one origin
+ * (accel_intersect16, accel_intersect64) aimed at 2x2 and 4x4 patches of
+ * neighbouring such points: every ray's hit is accel_intersect's, bit for
+ * bit.
  */
 #define EDGE_GRID 6
 static void tri_margins(void)
@@ -845,7 +854,7 @@ static void tri_margins(void)
 				}
 		struct accel *a;
 		CHECK(accel_build(s, &a, &err) == 0);
-		int mismatch = 0, hits = 0, hits16 = 0;
+		int mismatch = 0, hits = 0, hits16 = 0, hits64 = 0;
 		static const double offs[] = { 0, 1e-15, 1e-12, 1e-9, 1e-7 };
 		for (int k = 0; k < 4000; k++) {
 			int i = (int)(rng_uniform(31, 3ull * k) * (EDGE_GRID + 1)), j = (int)(rng_uniform(31, 3ull * k + 1) * (EDGE_GRID + 1));
@@ -883,12 +892,30 @@ static void tri_margins(void)
 				mismatch += !same_hit(b1, &h1, hit16[l], &h16[l]);
 				hits16 += b1;
 			}
+			/* sixteen packets aimed at a 4x4 patch of such points, as one
+			 * accel_intersect64 */
+			struct ray r64[64];
+			struct hit h64[64];
+			bool hit64[64];
+			for (int l = 0; l < 64; l++) {
+				int p = l >> 2;
+				vec3 tp = v3_add(target, v3(h * ((p & 1) + 2 * (p >> 2 & 1)), h * ((p >> 1 & 1) + 2 * (p >> 3)), 0));
+				vec3 tl = v3_add(tp, v3(e * ((l & 1) ? 1 : -1), e * ((l & 2) ? 1 : -1), 0));
+				r64[l] = (struct ray){ o, v3_sub(tl, o), 0, INFINITY };
+			}
+			accel_intersect64(a, r64, h64, hit64);
+			for (int l = 0; l < 64; l++) {
+				bool b1 = accel_intersect(a, &r64[l], &h1);
+				mismatch += !same_hit(b1, &h1, hit64[l], &h64[l]);
+				hits64 += b1;
+			}
 		}
-		printf("triangle pre-test margins (%s): 16000 rays in fours, 64000 in sixteens, %d and %d hits, %d unlike single rays\n",
-		       far ? "1000 units away" : "at the origin", hits, hits16, mismatch);
+		printf("triangle pre-test margins (%s): 16000 rays in fours, 64000 in sixteens, 256000 in sixty-fours, %d, %d and %d hits, %d unlike single rays\n",
+		       far ? "1000 units away" : "at the origin", hits, hits16, hits64, mismatch);
 		CHECK(mismatch == 0);
 		CHECK(hits > 8000);
 		CHECK(hits16 > 24000);
+		CHECK(hits64 > 64000);
 		accel_free(a);
 		scene_free(s);
 	}
