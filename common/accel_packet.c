@@ -2,12 +2,13 @@
  * accel_packet.c - packets of rays through the root group's tree
  * (accel_intersect4, accel_intersect16, accel_intersect64,
  * accel_occluded4): the closest-hit traversals bvh_hit4 (four rays from
- * anywhere) and bvh_hit_o (4, 16 or 64 rays from one origin), the any-hit traversal bvh_occluded4, and
- * their set-up. Each ray of a packet gets exactly the answer
- * accel_intersect or accel_occluded gives it (CANONICAL TIES,
- * accel_trace.h); the single-ray queries, the hits' completion and the
- * design are in accel.c, what both share in accel_trace.h. Without SSE2
- * the packet queries trace their rays one at a time.
+ * anywhere) and bvh_hit_o (4, 16 or 64 rays from one origin), the any-hit
+ * traversal bvh_occluded4, and their set-up. Each ray of a packet gets
+ * exactly the answer accel_intersect or accel_occluded gives it
+ * (CANONICAL TIES, accel_trace.h); the single-ray queries, the hits'
+ * completion and the design are in accel.c, what both share in
+ * accel_trace.h. Without SSE2 the packet queries trace their rays one at a
+ * time.
  */
 #include "common/accel.h"
 
@@ -674,44 +675,25 @@ static void group_hit4(const struct accel *A, const struct group *g, struct trac
 	}
 }
 
-/* group_hit for four packets of four rays from one origin and of one
- * octant (tr[4 * j ...]: packet j) through g's tree (g->bvh.n_nodes4). */
-static void group_hit16(const struct accel *A, const struct group *g, struct trace tr[16], uint32_t oct,
-			struct hit h[16], bool hit[16])
-{
-	struct cand best[16];
-	bool found[16];
-	struct ray4x P[4];
-	for (int i = 0; i < 16; i++) {
-		cand_init(&best[i]);
-		found[i] = group_hit_unbounded(A, g, &tr[i], &best[i], false);
-	}
-	for (int j = 0; j < 4; j++)
-		ray_box4(tr + 4 * j, g->center, &P[j]);
-	group_hit16o(A, g, tr, best, found, P, oct);
-	for (int i = 0; i < 16; i++) {
-		hit[i] = found[i];
-		if (found[i])
-			accel_finish(A, g, &tr[i], &best[i], &h[i]);
-	}
-}
-
-/* group_hit16 for sixteen packets of four rays from one origin and of one
- * octant. */
-static void group_hit64(const struct accel *A, const struct group *g, struct trace tr[64], uint32_t oct,
-			struct hit h[64], bool hit[64])
+/* group_hit for np packets of four rays (np 4 or 16; tr[4 * j ...]: packet
+ * j) from one origin and of one octant through g's tree (g->bvh.n_nodes4). */
+static void group_hit_block(const struct accel *A, const struct group *g, struct trace *tr, uint32_t oct, int np,
+			    struct hit *h, bool *hit)
 {
 	struct cand best[64];
 	bool found[64];
 	struct ray4x P[16];
-	for (int i = 0; i < 64; i++) {
+	for (int i = 0; i < 4 * np; i++) {
 		cand_init(&best[i]);
 		found[i] = group_hit_unbounded(A, g, &tr[i], &best[i], false);
 	}
-	for (int j = 0; j < 16; j++)
+	for (int j = 0; j < np; j++)
 		ray_box4(tr + 4 * j, g->center, &P[j]);
-	group_hit64o(A, g, tr, best, found, P, oct);
-	for (int i = 0; i < 64; i++) {
+	if (np == 16)
+		group_hit64o(A, g, tr, best, found, P, oct);
+	else
+		group_hit16o(A, g, tr, best, found, P, oct);
+	for (int i = 0; i < 4 * np; i++) {
 		hit[i] = found[i];
 		if (found[i])
 			accel_finish(A, g, &tr[i], &best[i], &h[i]);
@@ -910,42 +892,37 @@ void accel_intersect4(const struct accel *a, const struct ray r[4], struct hit h
 		hit[i] = accel_intersect(a, &r[i], &h[i]);
 }
 
-void accel_intersect16(const struct accel *a, const struct ray r[16], struct hit h[16], bool hit[16])
-{
-#if defined(__SSE2__)
-	struct trace tr[16];
-	uint32_t oct[4];
-	bool one = true; /* one origin, one octant: the whole-packet traversal */
-	for (int i = 1; i < 16 && one; i++)
-		one = memcmp(&r[i].o, &r[0].o, sizeof r[0].o) == 0;
-	for (int j = 0; j < 4 && one; j++)
-		one = packet_start(a, r + 4 * j, tr + 4 * j, &oct[j]) && oct[j] == oct[0];
-	if (one) {
-		group_hit16(a, a->root, tr, oct[0], h, hit);
-		return;
-	}
-#endif
-	for (int j = 0; j < 4; j++)
-		accel_intersect4(a, r + 4 * j, h + 4 * j, hit + 4 * j);
-}
-
-void accel_intersect64(const struct accel *a, const struct ray r[64], struct hit h[64], bool hit[64])
+/* accel_intersect16 (np 4) and accel_intersect64 (np 16). */
+static void intersect_block(const struct accel *a, const struct ray *r, int np, struct hit *h, bool *hit)
 {
 #if defined(__SSE2__)
 	struct trace tr[64];
 	uint32_t oct[16];
-	bool one = true; /* one origin (the same bits), one octant: the whole-packet traversal */
-	for (int i = 1; i < 64 && one; i++)
+	bool one = true; /* one origin (the same bits), one octant: the whole-block traversal */
+	for (int i = 1; i < 4 * np && one; i++)
 		one = memcmp(&r[i].o, &r[0].o, sizeof r[0].o) == 0;
-	for (int j = 0; j < 16 && one; j++)
+	for (int j = 0; j < np && one; j++)
 		one = packet_start(a, r + 4 * j, tr + 4 * j, &oct[j]) && oct[j] == oct[0];
 	if (one) {
-		group_hit64(a, a->root, tr, oct[0], h, hit);
+		group_hit_block(a, a->root, tr, oct[0], np, h, hit);
 		return;
 	}
 #endif
-	for (int j = 0; j < 4; j++)
-		accel_intersect16(a, r + 16 * j, h + 16 * j, hit + 16 * j);
+	for (int j = 0; j < 4; j++) /* four smaller blocks */
+		if (np == 16)
+			intersect_block(a, r + 16 * j, 4, h + 16 * j, hit + 16 * j);
+		else
+			accel_intersect4(a, r + 4 * j, h + 4 * j, hit + 4 * j);
+}
+
+void accel_intersect16(const struct accel *a, const struct ray r[16], struct hit h[16], bool hit[16])
+{
+	intersect_block(a, r, 4, h, hit);
+}
+
+void accel_intersect64(const struct accel *a, const struct ray r[64], struct hit h[64], bool hit[64])
+{
+	intersect_block(a, r, 16, h, hit);
 }
 
 void accel_occluded4(const struct accel *a, const struct ray r[4], bool occ[4], uint32_t *hint)

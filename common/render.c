@@ -4,14 +4,15 @@
  * The same code runs in the master (locally) and in every worker: a tile is
  * a rectangle of pixels, each pixel's colour comes from filter_pixel over
  * shade_trace, so it depends on the scene and the pixel alone. With one eye
- * ray per pixel (filter standard), the tile goes in 8x8 blocks whose
- * eye rays find their closest hits together (accel_intersect64, or
+ * ray per pixel (filter standard), the tile goes in 8x8 blocks whose eye
+ * rays find their closest hits together (accel_intersect64, or
  * accel_intersect16 for the 4x4 blocks of one cut by an edge: the same
  * hits, faster), shaded as 2x2 blocks whose shadow rays toward each point
  * light go together too (shade_eye_hit4); each pixel gets exactly the
- * colour filter_pixel would give. Other filters trace super-sample grids and adaptive corners four
- * rays at a time the same way (filter_pixels4 over trace_shade4), a grid's
- * packets running across four pixels of a row.
+ * colour filter_pixel would give. Other filters trace super-sample grids
+ * and adaptive corners four rays at a time the same way (filter_pixels4
+ * over trace_shade4), a grid's packets running across four pixels of a
+ * row.
  */
 #include "common/render.h"
 
@@ -196,7 +197,7 @@ static void put_rgbf32(vec3 c, uint8_t *out)
  * (filter_eye_block, filter_eye_ray4) made ready for trace_ready4; traced
  * there, each colour is what filter_pixel over trace_shade gives.
  */
-struct eye_oct {
+struct eye_8x8 {
 	int n[16];
 	int total;
 	uint8_t *dst[64];
@@ -216,7 +217,7 @@ struct block_walk {
 
 /* The 2x2 block at tile pixel (i, j) as q's block b (the tile's pixels
  * outside the image on the way written black). */
-static void add_block(const struct block_walk *w, uint32_t i, uint32_t j, struct eye_oct *q, int b)
+static void add_block(const struct block_walk *w, uint32_t i, uint32_t j, struct eye_8x8 *q, int b)
 {
 	const struct renderer *r = w->r;
 	struct tile_rect t = w->t;
@@ -250,7 +251,7 @@ static void add_block(const struct block_walk *w, uint32_t i, uint32_t j, struct
 
 /* The next 8x8 block with a pixel inside the image into q; false at the
  * tile's end. */
-static bool next_oct(struct block_walk *w, struct eye_oct *q)
+static bool next_8x8(struct block_walk *w, struct eye_8x8 *q)
 {
 	struct tile_rect t = w->t;
 	while (w->j < t.h) {
@@ -271,7 +272,7 @@ static bool next_oct(struct block_walk *w, struct eye_oct *q)
 
 /* Shades q's 2x2 blocks from..to - 1, whole ones, from their hits h (block
  * b's at 4 * b). */
-static void shade_blocks(const struct renderer *r, const struct eye_oct *q, int from, int to, const struct hit *h,
+static void shade_blocks(const struct renderer *r, const struct eye_8x8 *q, int from, int to, const struct hit *h,
 			 const bool *hit, vec3 out[64])
 {
 	for (int b = from; b < to; b++) {
@@ -286,7 +287,7 @@ static void shade_blocks(const struct renderer *r, const struct eye_oct *q, int 
  * closest hits from one accel_intersect64, a whole 4x4 block's from one
  * accel_intersect16, each shaded 2x2 block by 2x2 block; any other 2x2
  * block through trace_ready4. */
-static void trace_oct(const struct renderer *r, const struct eye_oct *q, vec3 out[64])
+static void trace_8x8(const struct renderer *r, const struct eye_8x8 *q, vec3 out[64])
 {
 	struct hit h[64];
 	bool hit[64];
@@ -320,16 +321,16 @@ static void tile_blocks(const struct renderer *r, struct tile_rect t, const stru
 			uint64_t *rays)
 {
 	struct block_walk w = { r, t, ps, rgb, 0, 0 };
-	struct eye_oct q[2];
+	struct eye_8x8 q[2];
 	int cur = 0;
-	bool have = next_oct(&w, &q[0]);
+	bool have = next_8x8(&w, &q[0]);
 	while (have) {
 		if (cancel_poll())
 			return;
-		have = next_oct(&w, &q[cur ^ 1]);
-		const struct eye_oct *e = &q[cur];
+		have = next_8x8(&w, &q[cur ^ 1]);
+		const struct eye_8x8 *e = &q[cur];
 		vec3 c[64];
-		trace_oct(r, e, c);
+		trace_8x8(r, e, c);
 		for (int b = 0; b < 16; b++)
 			for (int k = 0; k < e->n[b]; k++)
 				ps->put(c[4 * b + k], e->dst[4 * b + k]);

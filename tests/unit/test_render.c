@@ -228,17 +228,19 @@ int main(void)
 	free(e);
 
 	/* standard: exactly one eye ray per pixel; super-sample 1x1 (traced pixel
-	 * by pixel through filter_pixel) is the same image as standard's 2x2
-	 * blocks through accel_intersect4 */
+	 * by pixel through filter_pixel) is the same image as standard's blocks
+	 * (render.c: with 16-pixel tiles over 37x23, whole 8x8 blocks through
+	 * accel_intersect64, whole 4x4 ones of cut blocks through
+	 * accel_intersect16, the rest in 2x2 packets) */
 	c = base_camera();
 	add_filter(&c, FILTER_STANDARD);
 	s = make_scene(&c, 1);
 	CHECK(renderer_new(s, &r, &err) == 0);
 	a = render(r, 2, 16);
 	CHECK(renderer_rays(r) == W * H);
-	check_float_tiles(r, a); /* 2x2 blocks */
-	/* 2x2 blocks (render.c): odd tiles and -j give the same image; a tile
-	 * over the image's corner has its outside pixels black */
+	check_float_tiles(r, a); /* the blocks */
+	/* blocks (render.c): odd tiles and -j give the same image; a tile over
+	 * the image's corner has its outside pixels black */
 	uint8_t *o = render(r, 1, 3), *o2 = render(r, 3, 5);
 	CHECK(memcmp(a, o, W * H * 3) == 0 && memcmp(a, o2, W * H * 3) == 0);
 	free(o);
