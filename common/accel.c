@@ -30,9 +30,11 @@
  *              ACCEL_INST_LEAF (issue 3: <= 64 bytes per instance)
  * Unbounded references (planes, CSG with an infinite extent, instances of
  * groups holding those) sit in a list tested for every ray. The BVH is
- * binned SAH (bvh.c) collapsed to 4-wide nodes; traversal is iterative with
- * a fixed stack, nearest child first, and stops at the first hit for
- * accel_occluded. Packets of four rays (accel_intersect4, accel_occluded4,
+ * binned SAH (bvh.c) collapsed to 4-wide nodes, which packets walk; single
+ * rays walk the same tree widened to 8-wide nodes (WIDE NODES, bvh.h) where
+ * the group has them (every group but one of instances only). Traversal is
+ * iterative with a fixed stack, nearest child first, and stops at the first
+ * hit for accel_occluded. Packets of four rays (accel_intersect4, accel_occluded4,
  * accel_packet.c), and of 16 or 64 from one origin (accel_intersect16,
  * accel_intersect64), share one walk of the root group's tree; a last-blocker hint
  * (accel_occluded_hint) is tested before the tree. Instances recurse into their define's group (depth
@@ -231,6 +233,51 @@ static inline __attribute__((always_inline)) int node4_hit(const struct bvh4 *nd
 			float tfar = (b[far[k] + (uint32_t)c] - q->o[k]) * q->inv_far[k];
 			t0 = t0 > tnear ? t0 : tnear; /* _mm_max_ps(t0, tnear) */
 			t1 = t1 < tfar ? t1 : tfar;   /* _mm_min_ps(t1, tfar) */
+		}
+		tn[c] = t0;
+		mask |= (t0 <= t1) << c;
+	}
+	return mask;
+#endif
+}
+
+/*
+ * node4_hit on a WIDE NODE (bvh.h): the same slab test, eight children in
+ * two 4-lane halves, each half node4_hit's arithmetic; bit c of the mask
+ * for child c, entry distances in tn[0..8).
+ */
+_Static_assert(offsetof(struct bvh8, hi) == 24 * sizeof(float), "bvh8 rows: lo[3][8] then hi[3][8]");
+
+static inline __attribute__((always_inline)) int node8_hit(const struct bvh8 *nd, const struct ray4 *q,
+							    uint32_t oct, tspan tmin, tspan tmax, float tn[8])
+{
+	const float *b = (const float *)(const void *)nd; /* lo[3][8] then hi[3][8] */
+	const uint32_t near[3] = { 24 * (oct & 1), 8 + 24 * (oct >> 1 & 1), 16 + 24 * (oct >> 2 & 1) };
+	const uint32_t far[3] = { 24 * (~oct & 1), 8 + 24 * (~oct >> 1 & 1), 16 + 24 * (~oct >> 2 & 1) };
+#if defined(__SSE2__)
+	__m128 a0 = tmin, a1 = tmax, b0 = tmin, b1 = tmax;
+	for (int k = 0; k < 3; k++) {
+		__m128 an = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + near[k]), q->o[k]), q->inv_near[k]);
+		__m128 bn = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + near[k] + 4), q->o[k]), q->inv_near[k]);
+		__m128 af = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + far[k]), q->o[k]), q->inv_far[k]);
+		__m128 bf = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + far[k] + 4), q->o[k]), q->inv_far[k]);
+		a0 = _mm_max_ps(a0, an);
+		b0 = _mm_max_ps(b0, bn);
+		a1 = _mm_min_ps(a1, af);
+		b1 = _mm_min_ps(b1, bf);
+	}
+	_mm_storeu_ps(tn, a0);
+	_mm_storeu_ps(tn + 4, b0);
+	return _mm_movemask_ps(_mm_cmple_ps(a0, a1)) | _mm_movemask_ps(_mm_cmple_ps(b0, b1)) << 4;
+#else
+	int mask = 0;
+	for (int c = 0; c < 8; c++) {
+		float t0 = tmin, t1 = tmax;
+		for (int k = 0; k < 3; k++) {
+			float tnear = (b[near[k] + (uint32_t)c] - q->o[k]) * q->inv_near[k];
+			float tfar = (b[far[k] + (uint32_t)c] - q->o[k]) * q->inv_far[k];
+			t0 = t0 > tnear ? t0 : tnear;
+			t1 = t1 < tfar ? t1 : tfar;
 		}
 		tn[c] = t0;
 		mask |= (t0 <= t1) << c;
@@ -578,6 +625,7 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 {
 	bool found = false;
 	const struct bvh4 *nodes = g->bvh.nodes;
+	const struct bvh8 *nodes8 = g->bvh.nodes8; /* WIDE NODES: used when there */
 	const struct ray4 q = *qp;
 	const tspan tmin = tspan_of(box_tmin(r->tmin * q.tscale));
 	float tmax = box_tmax(r->tmax * q.tscale);
@@ -585,7 +633,7 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 	struct {
 		uint32_t idx, n;
 		float t;
-	} stack[3 * BVH_MAX_DEPTH + 4];
+	} stack[7 * BVH_MAX_DEPTH + 8];
 	int sp = 0;
 	uint32_t idx = 0, n = 0;
 	uint32_t polls = ACCEL_POLL_POPS;
@@ -608,13 +656,22 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 			tmax = box_tmax(r->tmax * q.tscale);
 			tmax4 = tspan_of(tmax);
 		} else {
-			const struct bvh4 *nd = &nodes[idx];
-			float tn[4];
-			int m = node4_hit(nd, &q, oct, tmin, tmax4, tn);
+			float tn[8];
+			int m;
+			const uint32_t *ci, *cn; /* the node's idx[] and n[] */
+			if (nodes8) {
+				const struct bvh8 *nd = &nodes8[idx];
+				m = node8_hit(nd, &q, oct, tmin, tmax4, tn);
+				ci = nd->idx, cn = nd->n;
+			} else {
+				const struct bvh4 *nd = &nodes[idx];
+				m = node4_hit(nd, &q, oct, tmin, tmax4, tn);
+				ci = nd->idx, cn = nd->n;
+			}
 			if (m && !(m & (m - 1))) { /* one child */
 				int c = __builtin_ctz((unsigned)m);
-				idx = nd->idx[c];
-				n = nd->n[c];
+				idx = ci[c];
+				n = cn[c];
 				continue;
 			}
 			int m2 = m & (m - 1); /* m without its lowest child */
@@ -624,22 +681,22 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 					int tc = c0;
 					c0 = c1, c1 = tc;
 				}
-				stack[sp].idx = nd->idx[c1];
-				stack[sp].n = nd->n[c1];
+				stack[sp].idx = ci[c1];
+				stack[sp].n = cn[c1];
 				stack[sp++].t = tn[c1];
-				idx = nd->idx[c0];
-				n = nd->n[c0];
+				idx = ci[c0];
+				n = cn[c0];
 				continue;
 			}
 			if (m) { /* nearest first; the others pushed farthest first */
-				int cs[4], k = children_by_entry(m, tn, cs);
+				int cs[8], k = children_by_entry(m, tn, cs);
 				for (int j = k - 1; j >= 1; j--) {
-					stack[sp].idx = nd->idx[cs[j]];
-					stack[sp].n = nd->n[cs[j]];
+					stack[sp].idx = ci[cs[j]];
+					stack[sp].n = cn[cs[j]];
 					stack[sp++].t = tn[cs[j]];
 				}
-				idx = nd->idx[cs[0]];
-				n = nd->n[cs[0]];
+				idx = ci[cs[0]];
+				n = cn[cs[0]];
 				continue;
 			}
 		}
@@ -737,12 +794,13 @@ static inline __attribute__((always_inline)) bool group_occluded_t(const struct 
 	const tspan tmin = tspan_of(box_tmin(r->tmin * q.tscale)), tmax = tspan_of(box_tmax(r->tmax * q.tscale));
 	struct {
 		uint32_t idx, n;
-	} stack[3 * BVH_MAX_DEPTH + 4];
+	} stack[7 * BVH_MAX_DEPTH + 8];
 	int sp = 0;
 	uint32_t idx = 0, n = 0;
 	uint32_t polls = ACCEL_POLL_POPS;
 	struct tri1 q1; /* TRIANGLE PRE-TEST, set up at the first block */
 	bool q1_ready = false;
+	const struct bvh8 *nodes8 = g->bvh.nodes8; /* WIDE NODES: used when there */
 	for (;;) {
 		if (n & LEAF_BLOCK) {
 			uint32_t ref = block_occluded(g, &g->tblk[idx], n & ~LEAF_BLOCK, r, &q1, &q1_ready);
@@ -762,19 +820,28 @@ static inline __attribute__((always_inline)) bool group_occluded_t(const struct 
 					return true;
 				}
 		} else {
-			const struct bvh4 *nd = &nodes[idx];
-			float tn[4];
-			int m = node4_hit(nd, &q, q.oct, tmin, tmax, tn);
-			if (m) {
+			float tn[8];
+			int m;
+			const uint32_t *ci, *cn; /* the node's idx[] and n[] */
+			if (nodes8) {
+				const struct bvh8 *nd = &nodes8[idx];
+				m = node8_hit(nd, &q, q.oct, tmin, tmax, tn);
+				ci = nd->idx, cn = nd->n;
+			} else {
+				const struct bvh4 *nd = &nodes[idx];
+				m = node4_hit(nd, &q, q.oct, tmin, tmax, tn);
+				ci = nd->idx, cn = nd->n;
+			}
+			if (m) { /* the first child in slot order; the others pushed last first */
 				int c = __builtin_ctz((unsigned)m);
-				for (int j = 3; j > c; j--) {
-					if (m >> j & 1) {
-						stack[sp].idx = nd->idx[j];
-						stack[sp++].n = nd->n[j];
-					}
+				for (unsigned mm = (unsigned)m & ((unsigned)m - 1); mm;) {
+					int j = 31 - __builtin_clz(mm);
+					mm ^= 1u << j;
+					stack[sp].idx = ci[j];
+					stack[sp++].n = cn[j];
 				}
-				idx = nd->idx[c];
-				n = nd->n[c];
+				idx = ci[c];
+				n = cn[c];
 				continue;
 			}
 		}

@@ -862,6 +862,9 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			goto cancelled;
 		if (mrc < 0)
 			goto oom;
+		if (bvh_make8(&g->bvh) < 0) /* WIDE NODES (bvh.h), after the blocks */
+			goto oom;
+		g->bytes += (size_t)g->bvh.n_nodes8 * sizeof(struct bvh8);
 	}
 	if (n_bounded) { /* back to the group's space, covering the padding */
 		g->bounds.lo = v3_add(g->bounds.lo, g->center);

@@ -519,14 +519,14 @@ static inline __attribute__((always_inline)) uint32_t block_occluded(const struc
 	return ACCEL_NO_HINT;
 }
 
-/* The children in mask m (bit c: child c) by entry distance key[c],
- * nearest first, ties in slot order, into cs; returns how many. */
-static inline __attribute__((always_inline)) int children_by_entry(int m, const float key[4], int cs[4])
+/* The children in mask m (bit c: child c, 4 or 8 of them) by entry
+ * distance key[c], nearest first, ties in slot order, into cs; returns
+ * how many. */
+static inline __attribute__((always_inline)) int children_by_entry(int m, const float *key, int *cs)
 {
 	int k = 0;
-	for (int c = 0; c < 4; c++) {
-		if (!(m >> c & 1))
-			continue;
+	for (unsigned mm = (unsigned)m; mm; mm &= mm - 1) {
+		int c = __builtin_ctz(mm);
 		int j = k++;
 		for (; j > 0 && key[cs[j - 1]] > key[c]; j--)
 			cs[j] = cs[j - 1];

@@ -667,10 +667,107 @@ int bvh_build_f(struct bvh *b, float (*boxes)[6], uint32_t n, uint32_t *perm, ui
 	return build(b, NULL, boxes, n, perm, max_leaf, pack, NULL);
 }
 
+/* A child slot of a bvh4 or bvh8 node, while bvh_make8 gathers them. */
+struct slot8 {
+	float lo[3], hi[3];
+	uint32_t idx, n;
+};
+
+/* Child c of nd is a subtree (not a leaf, not an unused slot). */
+static bool inner4(const struct bvh4 *nd, int c) { return nd->n[c] == 0 && nd->lo[0][c] == nd->lo[0][c]; }
+
+static int slots4(const struct bvh4 *nd, struct slot8 *s)
+{
+	int k = 0;
+	for (int c = 0; c < 4; c++) {
+		if (nd->n[c] == 0 && !inner4(nd, c))
+			continue; /* unused */
+		for (int a = 0; a < 3; a++) {
+			s[k].lo[a] = nd->lo[a][c];
+			s[k].hi[a] = nd->hi[a][c];
+		}
+		s[k].idx = nd->idx[c];
+		s[k++].n = nd->n[c];
+	}
+	return k;
+}
+
+/*
+ * Node of bvh4 node ni and its subtree, into out from *next. The children
+ * of ni are taken, then the subtree child of largest area is replaced by
+ * its own children while they fit in eight (collapse()'s rule, one level
+ * up). The order of the slots does not matter to a hit (CANONICAL TIES).
+ */
+static uint32_t widen8(const struct bvh4 *in, uint32_t ni, struct bvh8 *out, uint32_t *next)
+{
+	uint32_t me = (*next)++;
+	struct slot8 s[8 + 4];
+	int k = slots4(&in[ni], s);
+	for (;;) {
+		int best = -1;
+		double best_area = -1;
+		for (int c = 0; c < k; c++) {
+			if (s[c].n)
+				continue;
+			const struct bvh4 *sn = &in[s[c].idx];
+			int used = 0;
+			for (int j = 0; j < 4; j++)
+				used += sn->n[j] != 0 || inner4(sn, j);
+			if (k - 1 + used > 8)
+				continue;
+			struct geom_box bx = { v3(s[c].lo[0], s[c].lo[1], s[c].lo[2]),
+					       v3(s[c].hi[0], s[c].hi[1], s[c].hi[2]) };
+			double a = box_area(bx);
+			if (a > best_area)
+				best_area = a, best = c;
+		}
+		if (best < 0)
+			break;
+		struct slot8 sub[4];
+		int ns = slots4(&in[s[best].idx], sub);
+		s[best] = sub[0];
+		for (int j = 1; j < ns; j++)
+			s[k++] = sub[j];
+	}
+	struct bvh8 nd;
+	for (int c = 0; c < 8; c++) {
+		for (int a = 0; a < 3; a++)
+			nd.lo[a][c] = nd.hi[a][c] = c < k ? 0 : NAN;
+		nd.idx[c] = 0;
+		nd.n[c] = 0;
+	}
+	for (int c = 0; c < k; c++) {
+		for (int a = 0; a < 3; a++) {
+			nd.lo[a][c] = s[c].lo[a];
+			nd.hi[a][c] = s[c].hi[a];
+		}
+		nd.n[c] = s[c].n;
+		nd.idx[c] = s[c].n ? s[c].idx : widen8(in, s[c].idx, out, next);
+	}
+	out[me] = nd;
+	return me;
+}
+
+int bvh_make8(struct bvh *b)
+{
+	if (!b->n_nodes4 || b->nodes8)
+		return 0;
+	struct bvh8 *out = malloc((size_t)b->n_nodes4 * sizeof *out);
+	if (!out)
+		return -1;
+	uint32_t next = 0;
+	widen8(b->nodes, 0, out, &next);
+	struct bvh8 *fit = realloc(out, (size_t)next * sizeof *fit);
+	b->nodes8 = fit ? fit : out;
+	b->n_nodes8 = next;
+	return 0;
+}
+
 void bvh_free(struct bvh *b)
 {
 	if (!b)
 		return;
 	free(b->nodes);
+	free(b->nodes8);
 	memset(b, 0, sizeof *b);
 }

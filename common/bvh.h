@@ -1,6 +1,6 @@
 /*
- * bvh.h - a binned-SAH bounding volume hierarchy over boxes, flattened into
- * an array of 32-byte nodes. The builder knows nothing of primitives: it
+ * bvh.h - a binned-SAH bounding volume hierarchy over boxes, collapsed into
+ * arrays of 4-wide nodes (and, on request, 8-wide ones). The builder knows nothing of primitives: it
  * orders item indices; traversal lives with the primitives (accel.c,
  * accel_packet.c).
  */
@@ -39,9 +39,25 @@ struct bvh4 {
 	uint32_t n[4];
 };
 
+/*
+ * WIDE NODES for single rays: the same tree with each node's children
+ * pulled up from its grandchildren until it has up to eight (bvh_make8),
+ * so a single ray makes about half the node visits, each one 8-wide slab
+ * test. Leaves and unused slots are as in bvh4 (the leaves' idx and n are
+ * copied as the 4-wide tree holds them, flags included); an interior
+ * child's idx is a bvh8 node. 256 bytes, four cache lines.
+ */
+struct bvh8 {
+	float lo[3][8], hi[3][8];
+	uint32_t idx[8];
+	uint32_t n[8];
+};
+
 struct bvh {
 	struct bvh4 *nodes;     /* owned; node 0 is the root unless root_n > 0 */
 	uint32_t n_nodes4;
+	struct bvh8 *nodes8;    /* owned, or NULL: WIDE NODES of the same tree */
+	uint32_t n_nodes8;
 	float root_b[6];        /* the root's bounds: min x y z, max x y z */
 	uint32_t root_idx, root_n; /* root_n > 0: the root is a leaf (no nodes) */
 	uint32_t n_nodes;       /* binary nodes the builder made (statistics) */
@@ -80,6 +96,9 @@ int bvh_build_cost(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint
  * peak of memory would otherwise hold both). */
 int bvh_build_f(struct bvh *b, float (*boxes)[6], uint32_t n, uint32_t *perm, uint32_t max_leaf, bool pack);
 void bvh_free(struct bvh *b);
+/* WIDE NODES: b->nodes8 from b->nodes as they are now (call it after the
+ * leaves' last change). Returns 0, or -1 when out of memory (b unchanged). */
+int bvh_make8(struct bvh *b);
 /*
  * How many threads a build may use (the calling one included): 0, the
  * default, means one per online processor (at most 8). Builds of fewer

@@ -669,6 +669,50 @@ static void instances_beyond_floats(void)
 }
 
 /* Builder invariants on random boxes and on boxes with one centroid. */
+/*
+ * WIDE NODES (bvh_make8): the 8-wide tree holds the 4-wide tree's leaves,
+ * each once, with the same (idx, n) and boxes that hold their items;
+ * unused slots are NaN and come last; children follow their parents; and
+ * the nodes are wider (fewer of them, more than four children on average).
+ */
+static void wide_nodes(struct bvh *b, const struct geom_box *bx, const uint32_t *perm, uint32_t n)
+{
+	CHECK(bvh_make8(b) == 0);
+	CHECK(b->nodes8 != NULL && b->n_nodes8 >= 1 && b->n_nodes8 < b->n_nodes4);
+	int *seen = calloc(n, sizeof *seen);
+	int bad = 0;
+	uint32_t covered = 0, slots = 0;
+	for (uint32_t ni = 0; ni < b->n_nodes8; ni++) {
+		const struct bvh8 *p = &b->nodes8[ni];
+		for (int c = 0; c < 8; c++) {
+			if (isnan(p->lo[0][c])) {
+				bad += !isnan(p->hi[2][c]) || (c < 7 && !isnan(p->lo[0][c + 1])) || c < 2 || p->n[c];
+				continue;
+			}
+			slots++;
+			if (!p->n[c]) {
+				bad += p->idx[c] <= ni || p->idx[c] >= b->n_nodes8;
+				continue;
+			}
+			for (uint32_t k = p->idx[c]; k < p->idx[c] + p->n[c]; k++) {
+				uint32_t it = perm[k];
+				seen[it]++;
+				covered++;
+				bad += !(p->lo[0][c] <= bx[it].lo.x && p->lo[1][c] <= bx[it].lo.y &&
+					 p->lo[2][c] <= bx[it].lo.z && p->hi[0][c] >= bx[it].hi.x &&
+					 p->hi[1][c] >= bx[it].hi.y && p->hi[2][c] >= bx[it].hi.z);
+			}
+		}
+	}
+	for (uint32_t i = 0; i < n; i++)
+		bad += seen[i] != 1;
+	CHECK(covered == n);
+	CHECK(bad == 0);
+	CHECK(slots > 4 * b->n_nodes8); /* wider than the 4-wide nodes */
+	CHECK(bvh_make8(b) == 0);       /* a second call keeps the tree */
+	free(seen);
+}
+
 static void builder(void)
 {
 	for (int trial = 0; trial < 2; trial++) {
@@ -714,6 +758,7 @@ static void builder(void)
 			bad += seen[i] != 1;
 		CHECK(covered == n);
 		CHECK(bad == 0);
+		wide_nodes(&b, bx, perm, n);
 		/* packed: no leaf above 8 items, no interior node over 8 or fewer */
 		struct bvh bp;
 		CHECK(bvh_build_ex(&bp, bx, n, perm, 8, true) == 0);
