@@ -74,24 +74,53 @@ struct shade_ctx {
 };
 
 /*
- * LAST-BLOCKER HINTS (accel_occluded_hint): one per light and thread, in a
- * small direct-mapped table of the thread's, keyed by (context, light). A
- * hint never changes an answer, only what is tested first, so a slot that
- * two lights share, or a stale context at a reused address, costs time at
- * most; the table lives in thread-local storage because shading's context
- * is shared, read-only, by every tracing thread.
+ * LAST-BLOCKER HINTS (accel_occluded_hint): the blocker a thread's last
+ * shadow ray toward a light met, tested first by its next one. The hints
+ * sit in two direct-mapped tables of the thread's:
+ * - eye hits and shadow packets: one hint per (context, light), since
+ *   neighbouring pixels' shadows are cast by the same blockers;
+ * - hits of secondary rays: one per (context, light, object hit), since
+ *   consecutive reflection hits land anywhere, but a hit on an object
+ *   seen before is likely shadowed by what shadowed it then (a sphere of
+ *   the sphereflake, a ring's neighbour): balls_s4 -2.8%, rings_s3 -3.7%
+ *   (docs/performance.md, round 10).
+ * A hint never changes an answer, only what is tested first, so a slot
+ * that two keys share, or a stale context at a reused address, costs time
+ * at most; the tables live in thread-local storage because shading's
+ * context is shared, read-only, by every tracing thread. (One table of
+ * 4096 for both kinds cost tetra_s4 8%: its eye hints then sat at the end
+ * of a 96 KiB block.)
  */
 #define SHADE_HINTS 64
+#define SHADE_OBJ_HINTS 4096
+#define SHADE_HINT_ANY UINT32_MAX /* the object of an eye hit or a packet */
 struct shade_hint {
 	const struct shade_ctx *c;
 	uint32_t light;
 	uint32_t ref;
 };
+struct shade_obj_hint {
+	const struct shade_ctx *c;
+	uint32_t light, obj;
+	uint32_t ref;
+};
 static _Thread_local struct shade_hint hints[SHADE_HINTS];
+static _Thread_local struct shade_obj_hint obj_hints[SHADE_OBJ_HINTS];
 
-/* The calling thread's hint for light i of c. */
-static uint32_t *light_hint(const struct shade_ctx *c, uint32_t i)
+/* The calling thread's hint for light i of c from a hit on object obj
+ * (SHADE_HINT_ANY: the light's own). */
+static uint32_t *light_hint(const struct shade_ctx *c, uint32_t i, uint32_t obj)
 {
+	if (obj != SHADE_HINT_ANY) {
+		struct shade_obj_hint *e = &obj_hints[(obj * 8u + i) % SHADE_OBJ_HINTS];
+		if (e->c != c || e->light != i || e->obj != obj) {
+			e->c = c;
+			e->light = i;
+			e->obj = obj;
+			e->ref = ACCEL_NO_HINT;
+		}
+		return &e->ref;
+	}
 	struct shade_hint *e = &hints[i % SHADE_HINTS];
 	if (e->c != c || e->light != i) {
 		e->c = c;
@@ -510,11 +539,12 @@ static void need_surface(const struct shade_ctx *c, struct hit *h)
  * the way, 0 when something opaque is; each transparent surface crossed
  * multiplies it by transparency x tran-colour.
  */
-static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp, uint32_t light, const struct shadow_pre *pre)
+static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp, uint32_t light, const struct shadow_pre *pre,
+			  uint32_t obj)
 {
 	struct ray r = { o, v3_sub(lp, o), 0, 1 };
 	if (!c->any_transparent)
-		return accel_occluded_hint(c->a, &r, light_hint(c, light)) ? v3(0, 0, 0) : v3(1, 1, 1);
+		return accel_occluded_hint(c->a, &r, light_hint(c, light, obj)) ? v3(0, 0, 0) : v3(1, 1, 1);
 	bool first_known = pre && light < SHADE_PRE_TLIGHTS && (pre->tknown >> light & 1);
 	const struct hit *first = first_known && (pre->thit >> light & 1) ? &pre->first[light] : NULL;
 	vec3 t = v3(1, 1, 1);
@@ -527,7 +557,7 @@ static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp, uint32_t l
 				return t;
 			h = *first;
 		} else if (!may_cross_transparent(c, &r)) { /* TRANSPARENT BOXES */
-			return accel_occluded_hint(c->a, &r, light_hint(c, light)) ? v3(0, 0, 0) : t;
+			return accel_occluded_hint(c->a, &r, light_hint(c, light, obj)) ? v3(0, 0, 0) : t;
 		} else if (!accel_intersect(c->a, &r, &h)) {
 			return t;
 		}
@@ -593,7 +623,8 @@ static int highlight_needed(double rv, double power, double kd, vec3 in, vec3 kc
  */
 static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng,
 							  vec3 v, const struct shader_mat *m, double kd,
-							  double weight, uint64_t seed, const struct shadow_pre *pre)
+							  double weight, uint64_t seed, const struct shadow_pre *pre,
+							  uint32_t obj)
 {
 	bool shadows = !c->s->image.no_shadows;
 	bool want_spec = m->specular != 0;
@@ -647,7 +678,7 @@ static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx 
 			if (maxabs(term) * weight < cut * n_samples)
 				continue;
 			if (shadows && !l->no_shadows && !known) {
-				vec3 t = transmittance(c, offset(p, ng, ldir), lp, i, pre);
+				vec3 t = transmittance(c, offset(p, ng, ldir), lp, i, pre, obj);
 				if (maxc(t) <= 0)
 					continue;
 				term = v3_mul(term, t);
@@ -688,6 +719,7 @@ struct surf {
 	const struct shader_mat *m; /* the material there: own, or the context's (PLAIN MATERIALS; its n unused) */
 	struct shader_mat own;
 	double td;           /* transparency clamped to [0, 1] */
+	uint32_t obj;        /* the object hit (LAST-BLOCKER HINTS' key) */
 };
 
 /* The context's evaluation of a material without a shader (PLAIN
@@ -710,6 +742,7 @@ static bool surf_prepare(const struct shade_ctx *c, const struct ray *r, const s
 	if (!v3_finite(p))
 		return false;
 	sf->p = p;
+	sf->obj = hp->object;
 	vec3 d = r->d;
 
 	/* face the viewer: the geometric normal decides the side, n follows it */
@@ -814,7 +847,8 @@ static vec3 surf_shade(const struct shade_ctx *c, const struct ray *r, const str
 		       double weight, uint64_t seed, const struct shadow_pre *pre)
 {
 	const struct shader_mat *m = sf->m;
-	vec3 col = direct(c, sf->p, sf->n, sf->ng, v3_neg(r->d), m, m->diffuse * (1 - sf->td), weight, seed, pre);
+	vec3 col = direct(c, sf->p, sf->n, sf->ng, v3_neg(r->d), m, m->diffuse * (1 - sf->td), weight, seed, pre,
+			  depth ? sf->obj : SHADE_HINT_ANY);
 	if (depth >= LIM_TRACE_DEPTH)
 		return col;
 	struct ray sr;
@@ -954,7 +988,7 @@ static void occlusion_packet(const struct shade_ctx *c, uint32_t i, struct ray r
 	for (int j = m; j < 4; j++)
 		r[j] = r[m - 1];
 	bool occ[4];
-	accel_occluded4(c->a, r, occ, light_hint(c, i));
+	accel_occluded4(c->a, r, occ, light_hint(c, i, SHADE_HINT_ANY));
 	for (int j = 0; j < m; j++) {
 		pre[who[j]].known |= 1u << i;
 		pre[who[j]].occ |= (uint32_t)occ[j] << i;
