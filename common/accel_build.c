@@ -862,7 +862,10 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 			goto cancelled;
 		if (mrc < 0)
 			goto oom;
-		if (bvh_make8(&g->bvh) < 0) /* WIDE NODES (bvh.h), after the blocks */
+		int wrc = bvh_make8(&g->bvh); /* WIDE NODES (bvh.h), after the blocks */
+		if (wrc == BVH_CANCELLED)
+			goto cancelled;
+		if (wrc < 0)
 			goto oom;
 		g->bytes += (size_t)g->bvh.n_nodes8 * sizeof(struct bvh8);
 	}

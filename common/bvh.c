@@ -701,6 +701,8 @@ static int slots4(const struct bvh4 *nd, struct slot8 *s)
 static uint32_t widen8(const struct bvh4 *in, uint32_t ni, struct bvh8 *out, uint32_t *next)
 {
 	uint32_t me = (*next)++;
+	if (cancel_seen() || cancel_poll_every(me)) /* as collapse(): the caller checks cancel_seen */
+		return me;
 	struct slot8 s[8 + 4];
 	int k = slots4(&in[ni], s);
 	for (;;) {
@@ -757,6 +759,10 @@ int bvh_make8(struct bvh *b)
 		return -1;
 	uint32_t next = 0;
 	widen8(b->nodes, 0, out, &next);
+	if (cancel_seen()) {
+		free(out);
+		return BVH_CANCELLED;
+	}
 	struct bvh8 *fit = realloc(out, (size_t)next * sizeof *fit);
 	b->nodes8 = fit ? fit : out;
 	b->n_nodes8 = next;

@@ -97,7 +97,8 @@ int bvh_build_cost(struct bvh *b, const struct geom_box *boxes, uint32_t n, uint
 int bvh_build_f(struct bvh *b, float (*boxes)[6], uint32_t n, uint32_t *perm, uint32_t max_leaf, bool pack);
 void bvh_free(struct bvh *b);
 /* WIDE NODES: b->nodes8 from b->nodes as they are now (call it after the
- * leaves' last change). Returns 0, or -1 when out of memory (b unchanged). */
+ * leaves' last change). Returns 0, -1 when out of memory, or BVH_CANCELLED
+ * (b unchanged then). */
 int bvh_make8(struct bvh *b);
 /*
  * How many threads a build may use (the calling one included): 0, the
