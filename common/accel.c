@@ -633,7 +633,7 @@ static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A,
 	struct {
 		uint32_t idx, n;
 		float t;
-	} stack[7 * BVH_MAX_DEPTH + 8];
+	} stack[7 * BVH_MAX_DEPTH + 8]; /* up to 7 children a level (WIDE NODES), and a chunk's rest */
 	int sp = 0;
 	uint32_t idx = 0, n = 0;
 	uint32_t polls = ACCEL_POLL_POPS;
@@ -794,7 +794,7 @@ static inline __attribute__((always_inline)) bool group_occluded_t(const struct 
 	const tspan tmin = tspan_of(box_tmin(r->tmin * q.tscale)), tmax = tspan_of(box_tmax(r->tmax * q.tscale));
 	struct {
 		uint32_t idx, n;
-	} stack[7 * BVH_MAX_DEPTH + 8];
+	} stack[7 * BVH_MAX_DEPTH + 8]; /* as bvh_hit's */
 	int sp = 0;
 	uint32_t idx = 0, n = 0;
 	uint32_t polls = ACCEL_POLL_POPS;
