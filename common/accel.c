@@ -183,8 +183,8 @@ static inline float box_tmin(double x) { return (float)(x * (1 - 0x1p-22) - 0x1p
 static inline float box_tmax(double x) { return (float)(x * (1 + 0x1p-22) + 0x1p-140); }
 
 /*
- * Slab test of the four children of nd against [tmin, tmax] (box space,
- * tmin >= 0). Returns a mask (bit c: child c may be hit) and the widened
+ * Slab test of four children against [tmin, tmax] (box space, tmin >= 0):
+ * slab4, and node4_hit for a node's. Returns a mask (bit c: child c may be hit) and the widened
  * entry distances in tn.
  *
  * The near plane of each axis is chosen once per ray by the direction's
@@ -207,13 +207,14 @@ typedef float tspan;
 static inline tspan tspan_of(float t) { return t; }
 #endif
 
-static inline __attribute__((always_inline)) int node4_hit(const struct bvh4 *nd, const struct ray4 *q,
-							    uint32_t oct, tspan tmin, tspan tmax, float tn[4])
+/* The slab test of four children whose bounds are rows of w floats
+ * (lo[3][w] then hi[3][w]) from b: lanes b[0..4) of each row. */
+static inline __attribute__((always_inline)) int slab4(const float *b, const uint32_t w, const struct ray4 *q,
+							uint32_t oct, tspan tmin, tspan tmax, float tn[4])
 {
-	const float *b = (const float *)(const void *)nd; /* lo[3][4] then hi[3][4] */
-	/* rows of bvh4: lo[k] at 4k, hi[k] at 12 + 4k */
-	const uint32_t near[3] = { 12 * (oct & 1), 4 + 12 * (oct >> 1 & 1), 8 + 12 * (oct >> 2 & 1) };
-	const uint32_t far[3] = { 12 * (~oct & 1), 4 + 12 * (~oct >> 1 & 1), 8 + 12 * (~oct >> 2 & 1) };
+	/* lo[k] at w k, hi[k] at w (3 + k); the near plane by the octant */
+	const uint32_t near[3] = { 3 * w * (oct & 1), w + 3 * w * (oct >> 1 & 1), 2 * w + 3 * w * (oct >> 2 & 1) };
+	const uint32_t far[3] = { 3 * w * (~oct & 1), w + 3 * w * (~oct >> 1 & 1), 2 * w + 3 * w * (~oct >> 2 & 1) };
 #if defined(__SSE2__)
 	__m128 t0 = tmin, t1 = tmax;
 	for (int k = 0; k < 3; k++) {
@@ -241,49 +242,24 @@ static inline __attribute__((always_inline)) int node4_hit(const struct bvh4 *nd
 #endif
 }
 
+static inline __attribute__((always_inline)) int node4_hit(const struct bvh4 *nd, const struct ray4 *q,
+							    uint32_t oct, tspan tmin, tspan tmax, float tn[4])
+{
+	return slab4((const float *)(const void *)nd, 4, q, oct, tmin, tmax, tn);
+}
+
 /*
  * node4_hit on a WIDE NODE (bvh.h): the same slab test, eight children in
- * two 4-lane halves, each half node4_hit's arithmetic; bit c of the mask
- * for child c, entry distances in tn[0..8).
+ * two 4-lane halves; bit c of the mask for child c, entry distances in
+ * tn[0..8).
  */
 _Static_assert(offsetof(struct bvh8, hi) == 24 * sizeof(float), "bvh8 rows: lo[3][8] then hi[3][8]");
 
 static inline __attribute__((always_inline)) int node8_hit(const struct bvh8 *nd, const struct ray4 *q,
 							    uint32_t oct, tspan tmin, tspan tmax, float tn[8])
 {
-	const float *b = (const float *)(const void *)nd; /* lo[3][8] then hi[3][8] */
-	const uint32_t near[3] = { 24 * (oct & 1), 8 + 24 * (oct >> 1 & 1), 16 + 24 * (oct >> 2 & 1) };
-	const uint32_t far[3] = { 24 * (~oct & 1), 8 + 24 * (~oct >> 1 & 1), 16 + 24 * (~oct >> 2 & 1) };
-#if defined(__SSE2__)
-	__m128 a0 = tmin, a1 = tmax, b0 = tmin, b1 = tmax;
-	for (int k = 0; k < 3; k++) {
-		__m128 an = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + near[k]), q->o[k]), q->inv_near[k]);
-		__m128 bn = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + near[k] + 4), q->o[k]), q->inv_near[k]);
-		__m128 af = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + far[k]), q->o[k]), q->inv_far[k]);
-		__m128 bf = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + far[k] + 4), q->o[k]), q->inv_far[k]);
-		a0 = _mm_max_ps(a0, an);
-		b0 = _mm_max_ps(b0, bn);
-		a1 = _mm_min_ps(a1, af);
-		b1 = _mm_min_ps(b1, bf);
-	}
-	_mm_storeu_ps(tn, a0);
-	_mm_storeu_ps(tn + 4, b0);
-	return _mm_movemask_ps(_mm_cmple_ps(a0, a1)) | _mm_movemask_ps(_mm_cmple_ps(b0, b1)) << 4;
-#else
-	int mask = 0;
-	for (int c = 0; c < 8; c++) {
-		float t0 = tmin, t1 = tmax;
-		for (int k = 0; k < 3; k++) {
-			float tnear = (b[near[k] + (uint32_t)c] - q->o[k]) * q->inv_near[k];
-			float tfar = (b[far[k] + (uint32_t)c] - q->o[k]) * q->inv_far[k];
-			t0 = t0 > tnear ? t0 : tnear;
-			t1 = t1 < tfar ? t1 : tfar;
-		}
-		tn[c] = t0;
-		mask |= (t0 <= t1) << c;
-	}
-	return mask;
-#endif
+	const float *b = (const float *)(const void *)nd;
+	return slab4(b, 8, q, oct, tmin, tmax, tn) | slab4(b + 4, 8, q, oct, tmin, tmax, tn + 4) << 4;
 }
 
 #define SLAB_WIDEN 4.5e-16 /* 1 + 2 gamma(3) for doubles, rounded up (Ize 2013) */

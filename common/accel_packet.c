@@ -576,54 +576,41 @@ static inline __attribute__((always_inline)) void bvh_hit_o(const struct accel *
 #undef SUB_SETUP
 }
 
-/* bvh_hit_o for one packet, one copy per octant. */
-static __attribute__((noinline)) void group_hit4o(const struct accel *A, const struct group *g, struct trace tr[4],
-						  struct cand best[4], bool found[4], const struct ray4x *P, uint32_t oct)
+/* bvh_hit_o for ng packets (1, 4 or 16), one copy per octant. */
+static inline __attribute__((always_inline)) void hit_o_octants(const struct accel *A, const struct group *g,
+								 struct trace *tr, struct cand *best, bool *found,
+								 const struct ray4x *P, uint32_t oct, const int ng)
 {
 	switch (oct) {
-	case 0: bvh_hit_o(A, g, tr, best, found, P, 0, 1); break;
-	case 1: bvh_hit_o(A, g, tr, best, found, P, 1, 1); break;
-	case 2: bvh_hit_o(A, g, tr, best, found, P, 2, 1); break;
-	case 3: bvh_hit_o(A, g, tr, best, found, P, 3, 1); break;
-	case 4: bvh_hit_o(A, g, tr, best, found, P, 4, 1); break;
-	case 5: bvh_hit_o(A, g, tr, best, found, P, 5, 1); break;
-	case 6: bvh_hit_o(A, g, tr, best, found, P, 6, 1); break;
-	default: bvh_hit_o(A, g, tr, best, found, P, 7, 1); break;
+	case 0: bvh_hit_o(A, g, tr, best, found, P, 0, ng); break;
+	case 1: bvh_hit_o(A, g, tr, best, found, P, 1, ng); break;
+	case 2: bvh_hit_o(A, g, tr, best, found, P, 2, ng); break;
+	case 3: bvh_hit_o(A, g, tr, best, found, P, 3, ng); break;
+	case 4: bvh_hit_o(A, g, tr, best, found, P, 4, ng); break;
+	case 5: bvh_hit_o(A, g, tr, best, found, P, 5, ng); break;
+	case 6: bvh_hit_o(A, g, tr, best, found, P, 6, ng); break;
+	default: bvh_hit_o(A, g, tr, best, found, P, 7, ng); break;
 	}
 }
 
-/* bvh_hit_o for four packets, one copy per octant. */
+static __attribute__((noinline)) void group_hit4o(const struct accel *A, const struct group *g, struct trace tr[4],
+						  struct cand best[4], bool found[4], const struct ray4x *P, uint32_t oct)
+{
+	hit_o_octants(A, g, tr, best, found, P, oct, 1);
+}
+
 static __attribute__((noinline)) void group_hit16o(const struct accel *A, const struct group *g, struct trace tr[16],
 						   struct cand best[16], bool found[16], const struct ray4x P[4],
 						   uint32_t oct)
 {
-	switch (oct) {
-	case 0: bvh_hit_o(A, g, tr, best, found, P, 0, 4); break;
-	case 1: bvh_hit_o(A, g, tr, best, found, P, 1, 4); break;
-	case 2: bvh_hit_o(A, g, tr, best, found, P, 2, 4); break;
-	case 3: bvh_hit_o(A, g, tr, best, found, P, 3, 4); break;
-	case 4: bvh_hit_o(A, g, tr, best, found, P, 4, 4); break;
-	case 5: bvh_hit_o(A, g, tr, best, found, P, 5, 4); break;
-	case 6: bvh_hit_o(A, g, tr, best, found, P, 6, 4); break;
-	default: bvh_hit_o(A, g, tr, best, found, P, 7, 4); break;
-	}
+	hit_o_octants(A, g, tr, best, found, P, oct, 4);
 }
 
-/* bvh_hit_o for sixteen packets, one copy per octant. */
 static __attribute__((noinline)) void group_hit64o(const struct accel *A, const struct group *g, struct trace tr[64],
 						   struct cand best[64], bool found[64], const struct ray4x P[16],
 						   uint32_t oct)
 {
-	switch (oct) {
-	case 0: bvh_hit_o(A, g, tr, best, found, P, 0, 16); break;
-	case 1: bvh_hit_o(A, g, tr, best, found, P, 1, 16); break;
-	case 2: bvh_hit_o(A, g, tr, best, found, P, 2, 16); break;
-	case 3: bvh_hit_o(A, g, tr, best, found, P, 3, 16); break;
-	case 4: bvh_hit_o(A, g, tr, best, found, P, 4, 16); break;
-	case 5: bvh_hit_o(A, g, tr, best, found, P, 5, 16); break;
-	case 6: bvh_hit_o(A, g, tr, best, found, P, 6, 16); break;
-	default: bvh_hit_o(A, g, tr, best, found, P, 7, 16); break;
-	}
+	hit_o_octants(A, g, tr, best, found, P, oct, 16);
 }
 
 /* group_hit for four rays of one octant through g's tree (g->bvh.n_nodes4). */

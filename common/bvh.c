@@ -673,15 +673,24 @@ struct slot8 {
 	uint32_t idx, n;
 };
 
-/* Child c of nd is a subtree (not a leaf, not an unused slot). */
-static bool inner4(const struct bvh4 *nd, int c) { return nd->n[c] == 0 && nd->lo[0][c] == nd->lo[0][c]; }
+/* Child c of nd is used (a leaf or a subtree): unused slots are NaN. */
+static bool used4(const struct bvh4 *nd, int c) { return nd->lo[0][c] == nd->lo[0][c]; }
 
+static int count4(const struct bvh4 *nd)
+{
+	int k = 0;
+	for (int c = 0; c < 4; c++)
+		k += used4(nd, c);
+	return k;
+}
+
+/* nd's used children into s; returns how many. */
 static int slots4(const struct bvh4 *nd, struct slot8 *s)
 {
 	int k = 0;
 	for (int c = 0; c < 4; c++) {
-		if (nd->n[c] == 0 && !inner4(nd, c))
-			continue; /* unused */
+		if (!used4(nd, c))
+			continue;
 		for (int a = 0; a < 3; a++) {
 			s[k].lo[a] = nd->lo[a][c];
 			s[k].hi[a] = nd->hi[a][c];
@@ -711,11 +720,7 @@ static uint32_t widen8(const struct bvh4 *in, uint32_t ni, struct bvh8 *out, uin
 		for (int c = 0; c < k; c++) {
 			if (s[c].n)
 				continue;
-			const struct bvh4 *sn = &in[s[c].idx];
-			int used = 0;
-			for (int j = 0; j < 4; j++)
-				used += sn->n[j] != 0 || inner4(sn, j);
-			if (k - 1 + used > 8)
+			if (k - 1 + count4(&in[s[c].idx]) > 8)
 				continue;
 			struct geom_box bx = { v3(s[c].lo[0], s[c].lo[1], s[c].lo[2]),
 					       v3(s[c].hi[0], s[c].hi[1], s[c].hi[2]) };
@@ -732,9 +737,9 @@ static uint32_t widen8(const struct bvh4 *in, uint32_t ni, struct bvh8 *out, uin
 			s[k++] = sub[j];
 	}
 	struct bvh8 nd;
-	for (int c = 0; c < 8; c++) {
+	for (int c = k; c < 8; c++) { /* unused */
 		for (int a = 0; a < 3; a++)
-			nd.lo[a][c] = nd.hi[a][c] = c < k ? 0 : NAN;
+			nd.lo[a][c] = nd.hi[a][c] = NAN;
 		nd.idx[c] = 0;
 		nd.n[c] = 0;
 	}

@@ -82,7 +82,7 @@ struct shade_ctx {
  * - hits of secondary rays: one per (context, light, object hit), since
  *   consecutive reflection hits land anywhere, but a hit on an object
  *   seen before is likely shadowed by what shadowed it then (a sphere of
- *   the sphereflake, a ring's neighbour): balls_s4 -2.8%, rings_s3 -3.7%
+ *   the sphereflake, a ring's neighbour): balls_s4 -3.2%, rings_s3 -4.0%
  *   (docs/performance.md, round 10).
  * A hint never changes an answer, only what is tested first, so a slot
  * that two keys share, or a stale context at a reused address, costs time

@@ -668,7 +668,36 @@ static void instances_beyond_floats(void)
 	scene_free(s);
 }
 
-/* Builder invariants on random boxes and on boxes with one centroid. */
+/*
+ * Child c of a node whose bounds are rows of w floats (lo[3][w] then
+ * hi[3][w]), of nn nodes, the node's index ni: the number of broken
+ * invariants. An unused slot is all NaN, with nothing used after it and
+ * at least two used before; a subtree comes after its parent; a leaf's
+ * box holds its items, each counted in seen and covered.
+ */
+static int check_child(const float *rows, int w, const uint32_t *idx, const uint32_t *cnt, int c, uint32_t ni,
+		       uint32_t nn, const uint32_t *perm, const struct geom_box *bx, int *seen, uint32_t *covered)
+{
+	float lo[3], hi[3];
+	for (int a = 0; a < 3; a++) {
+		lo[a] = rows[a * w + c];
+		hi[a] = rows[(3 + a) * w + c];
+	}
+	if (isnan(lo[0]))
+		return !isnan(hi[2]) || (c < w - 1 && !isnan(rows[c + 1])) || c < 2 || cnt[c];
+	if (!cnt[c])
+		return idx[c] <= ni || idx[c] >= nn;
+	int bad = 0;
+	for (uint32_t k = idx[c]; k < idx[c] + cnt[c]; k++) {
+		uint32_t it = perm[k];
+		seen[it]++;
+		(*covered)++;
+		bad += !(lo[0] <= bx[it].lo.x && lo[1] <= bx[it].lo.y && lo[2] <= bx[it].lo.z && hi[0] >= bx[it].hi.x &&
+			 hi[1] >= bx[it].hi.y && hi[2] >= bx[it].hi.z);
+	}
+	return bad;
+}
+
 /*
  * WIDE NODES (bvh_make8): the 8-wide tree holds the 4-wide tree's leaves,
  * each once, with the same (idx, n) and boxes that hold their items;
@@ -685,23 +714,9 @@ static void wide_nodes(struct bvh *b, const struct geom_box *bx, const uint32_t 
 	for (uint32_t ni = 0; ni < b->n_nodes8; ni++) {
 		const struct bvh8 *p = &b->nodes8[ni];
 		for (int c = 0; c < 8; c++) {
-			if (isnan(p->lo[0][c])) {
-				bad += !isnan(p->hi[2][c]) || (c < 7 && !isnan(p->lo[0][c + 1])) || c < 2 || p->n[c];
-				continue;
-			}
-			slots++;
-			if (!p->n[c]) {
-				bad += p->idx[c] <= ni || p->idx[c] >= b->n_nodes8;
-				continue;
-			}
-			for (uint32_t k = p->idx[c]; k < p->idx[c] + p->n[c]; k++) {
-				uint32_t it = perm[k];
-				seen[it]++;
-				covered++;
-				bad += !(p->lo[0][c] <= bx[it].lo.x && p->lo[1][c] <= bx[it].lo.y &&
-					 p->lo[2][c] <= bx[it].lo.z && p->hi[0][c] >= bx[it].hi.x &&
-					 p->hi[1][c] >= bx[it].hi.y && p->hi[2][c] >= bx[it].hi.z);
-			}
+			slots += !isnan(p->lo[0][c]);
+			bad += check_child((const float *)(const void *)p, 8, p->idx, p->n, c, ni, b->n_nodes8, perm, bx, seen,
+					   &covered);
 		}
 	}
 	for (uint32_t i = 0; i < n; i++)
@@ -713,6 +728,7 @@ static void wide_nodes(struct bvh *b, const struct geom_box *bx, const uint32_t 
 	free(seen);
 }
 
+/* Builder invariants on random boxes and on boxes with one centroid. */
 static void builder(void)
 {
 	for (int trial = 0; trial < 2; trial++) {
@@ -735,24 +751,9 @@ static void builder(void)
 		uint32_t covered = 0;
 		for (uint32_t ni = 0; ni < b.n_nodes4; ni++) {
 			const struct bvh4 *p = &b.nodes[ni];
-			for (int c = 0; c < 4; c++) {
-				if (isnan(p->lo[0][c])) { /* unused slot: all NaN, nothing after it */
-					bad += !isnan(p->hi[2][c]) || (c < 3 && !isnan(p->lo[0][c + 1])) || c < 2;
-					continue;
-				}
-				if (!p->n[c]) {
-					bad += p->idx[c] <= ni || p->idx[c] >= b.n_nodes4; /* children after parents */
-					continue;
-				}
-				for (uint32_t k = p->idx[c]; k < p->idx[c] + p->n[c]; k++) {
-					uint32_t it = perm[k];
-					seen[it]++;
-					covered++;
-					bad += !(p->lo[0][c] <= bx[it].lo.x && p->lo[1][c] <= bx[it].lo.y &&
-						 p->lo[2][c] <= bx[it].lo.z && p->hi[0][c] >= bx[it].hi.x &&
-						 p->hi[1][c] >= bx[it].hi.y && p->hi[2][c] >= bx[it].hi.z);
-				}
-			}
+			for (int c = 0; c < 4; c++)
+				bad += check_child((const float *)(const void *)p, 4, p->idx, p->n, c, ni, b.n_nodes4, perm, bx, seen,
+						   &covered);
 		}
 		for (uint32_t i = 0; i < n; i++)
 			bad += seen[i] != 1;
