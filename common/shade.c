@@ -139,9 +139,9 @@ static uint32_t *light_hint(const struct shade_ctx *c, uint32_t i, uint32_t obj)
  * with direct()'s and transmittance()'s arithmetic, so the same answer.
  */
 #define SHADE_PRE_LIGHTS 32
-/* In scenes with transparent materials, the first closest hits of the
- * shadow rays toward the first SHADE_PRE_TLIGHTS point lights
- * (accel_intersect4); transmittance() goes on from there. */
+/* In scenes with transparent materials, the transmittances of the shadow
+ * rays toward the first SHADE_PRE_TLIGHTS point lights, walked in packets
+ * (walk_packet). */
 #define SHADE_PRE_TLIGHTS 8
 /* The way from a hit point p (shading normal n) to a point light lp, as
  * direct() finds it: dist = |lp - p|; when dist > 0, the unit direction
@@ -156,9 +156,8 @@ struct light_way {
 struct shadow_pre {
 	uint32_t known; /* bit i: light i's shadow ray from this hit was traced */
 	uint32_t occ;   /* bit i: ... and it was blocked */
-	uint32_t tknown; /* transparent scenes: bit i: first[i] (or a miss) is known */
-	uint32_t thit;   /* bit i: ... and it is a hit */
-	struct hit *first; /* [SHADE_PRE_TLIGHTS]: the hits (NULL when tknown is 0) */
+	uint32_t tknown; /* transparent scenes: bit i: tval[i] is light i's transmittance */
+	vec3 *tval;      /* [SHADE_PRE_TLIGHTS] (NULL when tknown is 0) */
 	/* LIGHT WAYS: bit i (a point light, i < SHADE_PRE_WAYS): way[i] is
 	 * direct()'s way from this hit to light i, made once for the shadow
 	 * packet and the shading both */
@@ -535,9 +534,68 @@ static void need_surface(const struct shade_ctx *c, struct hit *h)
 }
 
 /*
- * How much light passes from o to the point lp: (1,1,1) when nothing is in
- * the way, 0 when something opaque is; each transparent surface crossed
- * multiplies it by transparency x tran-colour.
+ * A shadow ray's walk toward its light through transparent surfaces
+ * (transmittance): the segment still ahead, the light let through so far
+ * and the surfaces crossed. Alone (twalk_next) or four in step
+ * (walk_packet), a walk crosses each closest hit with twalk_cross, so its
+ * answer is the same bit for bit.
+ */
+struct twalk {
+	struct ray r;
+	vec3 t;
+	int n;
+};
+
+/* Walk w crosses hit h, the closest of its segment (NULL: nothing is
+ * there): true when the walk ends, its answer in *out; else w goes on
+ * past h toward lp. */
+static bool twalk_cross(const struct shade_ctx *c, struct twalk *w, struct hit *h, vec3 lp, vec3 *out)
+{
+	if (!h) {
+		*out = w->t;
+		return true;
+	}
+	need_surface(c, h);
+	struct shader_point pt = { h->mp, h->u, h->v, h->n };
+	struct shader_mat m;
+	shader_eval(c->s, h->material, &pt, &m);
+	double td = fmin(m.transparency, 1.0);
+	*out = v3(0, 0, 0);
+	if (!(td > 0))
+		return true;
+	w->t = v3_scale(v3_mul(w->t, v3_max(m.tran_colour, v3(0, 0, 0))), td);
+	if (maxc(w->t) < SHADE_MIN_WEIGHT || ++w->n >= LIM_SHADOW_HITS)
+		return true;
+	w->r.o = offset(h->p, h->ng, w->r.d);
+	w->r.d = v3_sub(lp, w->r.o);
+	return false;
+}
+
+/* The end of walk w when its segment can meet no transparent surface
+ * (TRANSPARENT BOXES): true, the answer in *out, from an any-hit query
+ * with light i's hint for object obj. */
+static bool twalk_opaque(const struct shade_ctx *c, const struct twalk *w, uint32_t i, uint32_t obj, vec3 *out)
+{
+	if (may_cross_transparent(c, &w->r))
+		return false;
+	*out = accel_occluded_hint(c->a, &w->r, light_hint(c, i, obj)) ? v3(0, 0, 0) : w->t;
+	return true;
+}
+
+/* One step of walk w alone; twalk_cross's result. */
+static bool twalk_next(const struct shade_ctx *c, struct twalk *w, vec3 lp, uint32_t i, uint32_t obj, vec3 *out)
+{
+	if (twalk_opaque(c, w, i, obj, out))
+		return true;
+	struct hit h;
+	return twalk_cross(c, w, accel_intersect(c->a, &w->r, &h) ? &h : NULL, lp, out);
+}
+
+/*
+ * How much light passes from o to the point lp (light i; obj: the object
+ * hit, for the hint): (1,1,1) when nothing is in the way, 0 when something
+ * opaque is; each transparent surface crossed multiplies it by
+ * transparency x tran-colour. pre may know it from a packet's walk.
  */
 static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp, uint32_t light, const struct shadow_pre *pre,
 			  uint32_t obj)
@@ -545,36 +603,15 @@ static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp, uint32_t l
 	struct ray r = { o, v3_sub(lp, o), 0, 1 };
 	if (!c->any_transparent)
 		return accel_occluded_hint(c->a, &r, light_hint(c, light, obj)) ? v3(0, 0, 0) : v3(1, 1, 1);
-	bool first_known = pre && light < SHADE_PRE_TLIGHTS && (pre->tknown >> light & 1);
-	const struct hit *first = first_known && (pre->thit >> light & 1) ? &pre->first[light] : NULL;
-	vec3 t = v3(1, 1, 1);
-	for (int i = 0; i < LIM_SHADOW_HITS; i++) {
-		if (i && cancel_poll()) /* CANCELLATION: shaders may be costly */
+	if (pre && light < SHADE_PRE_TLIGHTS && (pre->tknown >> light & 1))
+		return pre->tval[light];
+	struct twalk w = { r, v3(1, 1, 1), 0 };
+	vec3 out;
+	do {
+		if (w.n && cancel_poll()) /* CANCELLATION: shaders may be costly */
 			return v3(0, 0, 0);
-		struct hit h;
-		if (i == 0 && first_known) { /* the ray's closest hit from a packet */
-			if (!first)
-				return t;
-			h = *first;
-		} else if (!may_cross_transparent(c, &r)) { /* TRANSPARENT BOXES */
-			return accel_occluded_hint(c->a, &r, light_hint(c, light, obj)) ? v3(0, 0, 0) : t;
-		} else if (!accel_intersect(c->a, &r, &h)) {
-			return t;
-		}
-		need_surface(c, &h);
-		struct shader_point pt = { h.mp, h.u, h.v, h.n };
-		struct shader_mat m;
-		shader_eval(c->s, h.material, &pt, &m);
-		double td = fmin(m.transparency, 1.0);
-		if (!(td > 0))
-			return v3(0, 0, 0);
-		t = v3_scale(v3_mul(t, v3_max(m.tran_colour, v3(0, 0, 0))), td);
-		if (maxc(t) < SHADE_MIN_WEIGHT)
-			return v3(0, 0, 0);
-		r.o = offset(h.p, h.ng, r.d);
-		r.d = v3_sub(lp, r.o);
-	}
-	return v3(0, 0, 0);
+	} while (!twalk_next(c, &w, lp, light, obj, &out));
+	return out;
 }
 
 /* The largest |channel|, or NaN when a channel is NaN or infinite (0 * it is NaN). */
@@ -966,7 +1003,7 @@ static inline int block_rays(const struct surf sf[4], const bool ok[4], int n, u
 static uint32_t packet_lights(const struct shade_ctx *c, struct shadow_pre pre[4])
 {
 	for (int k = 0; k < 4; k++)
-		pre[k].known = pre[k].occ = pre[k].tknown = pre[k].thit = pre[k].wknown = 0;
+		pre[k].known = pre[k].occ = pre[k].tknown = pre[k].wknown = 0;
 	if (c->s->image.no_shadows)
 		return 0;
 	return c->n_lights < SHADE_PRE_LIGHTS ? c->n_lights : SHADE_PRE_LIGHTS;
@@ -999,7 +1036,7 @@ static void shadow_packets(const struct shade_ctx *c, const struct surf sf[4], c
 			   struct shadow_pre pre[4])
 {
 	for (int k = 0; k < 4; k++)
-		pre[k].first = NULL;
+		pre[k].tval = NULL;
 	uint32_t n_lights = packet_lights(c, pre);
 	for (uint32_t i = 0; i < n_lights; i++) {
 		if (!packet_light(c, i))
@@ -1015,16 +1052,75 @@ static void shadow_packets(const struct shade_ctx *c, const struct surf sf[4], c
 }
 
 /*
+ * transmittance() of four shadow rays r[j] of one octant toward light i
+ * (at lp) as four walks in step, into t[j]: their first closest hits as
+ * one packet; then each round, the walks still going that may meet a
+ * transparent surface go together when they are two or more of one octant
+ * (accel_intersect4, lanes past them repeating the last), else one by one.
+ * obj[j]: the object walk j starts from, for the hint of the any-hit query
+ * that ends a walk whose segment meets no transparent surface.
+ */
+static void walk_packet(const struct shade_ctx *c, const struct ray r[4], vec3 lp, uint32_t i, const uint32_t obj[4],
+			vec3 t[4])
+{
+	struct twalk w[4];
+	int who[4], m = 4;
+	for (int j = 0; j < 4; j++) {
+		w[j] = (struct twalk){ r[j], v3(1, 1, 1), 0 };
+		who[j] = j;
+	}
+	for (;;) {
+		struct ray pr[4];
+		struct hit hh[4];
+		bool hit[4];
+		bool one = m >= 2;
+		for (int k = 0; k < m; k++) {
+			pr[k] = w[who[k]].r;
+			one &= octant(pr[k].d) == octant(pr[0].d);
+		}
+		if (one) {
+			for (int k = m; k < 4; k++)
+				pr[k] = pr[m - 1];
+			accel_intersect4(c->a, pr, hh, hit);
+		} else {
+			for (int k = 0; k < m; k++)
+				hit[k] = accel_intersect(c->a, &pr[k], &hh[k]);
+		}
+		int q = 0; /* the walks going on */
+		for (int k = 0; k < m; k++) {
+			int j = who[k];
+			if (!twalk_cross(c, &w[j], hit[k] ? &hh[k] : NULL, lp, &t[j]))
+				who[q++] = j;
+		}
+		if (q && cancel_poll()) { /* CANCELLATION */
+			for (int k = 0; k < q; k++)
+				t[who[k]] = v3(0, 0, 0);
+			return;
+		}
+		m = 0;
+		for (int k = 0; k < q; k++)
+			if (!twalk_opaque(c, &w[who[k]], i, obj[who[k]], &t[who[k]]))
+				who[m++] = who[k];
+		if (!m)
+			return;
+	}
+}
+
+/*
  * shadow_packets in a scene with transparent materials (TRANSPARENT
- * BOXES): a block whose rays toward a light all miss the boxes is traced
- * with accel_occluded4 as above; one where some ray may cross a
- * transparent surface, with accel_intersect4 for its closest hits when it
- * is a whole packet of one octant (transmittance() goes on from them), and
- * otherwise the rays that miss the boxes alone, the others left to
- * direct().
+ * BOXES), for hits at any depth (depth: the hits', for the hints): a block
+ * whose rays toward a light all miss the boxes is traced with
+ * accel_occluded4 as above; one where some ray may cross a transparent
+ * surface, as four walks in step (walk_packet) when it is a whole packet
+ * of one octant, and otherwise the rays that miss the boxes alone, the
+ * others left to direct(). The walks run whether or not direct() will
+ * need their answers (it skips a light whose term is too faint to count);
+ * walking them all still paid: gears_s2 -8.6% against packets for the
+ * first hits alone, the walks going on one by one (docs/performance.md,
+ * round 11).
  */
 static void shadow_packets_transparent(const struct shade_ctx *c, const struct surf sf[4], const bool ok[4], int n,
-				       struct shadow_pre pre[4])
+				       int depth, struct shadow_pre pre[4])
 {
 	uint32_t n_lights = packet_lights(c, pre);
 	for (uint32_t i = 0; i < n_lights; i++) {
@@ -1035,33 +1131,30 @@ static void shadow_packets_transparent(const struct shade_ctx *c, const struct s
 		int who[4];
 		int m = block_rays(sf, ok, n, i, l->position, pre, r, who);
 		bool cross[4];
-		int n_cross = 0;
+		int nc = 0;
 		for (int j = 0; j < m; j++)
-			n_cross += cross[j] = may_cross_transparent(c, &r[j]);
-		if (n_cross && m == 4 && i < SHADE_PRE_TLIGHTS && octant(r[1].d) == octant(r[0].d) &&
+			nc += cross[j] = may_cross_transparent(c, &r[j]);
+		if (nc && m == 4 && i < SHADE_PRE_TLIGHTS && octant(r[1].d) == octant(r[0].d) &&
 		    octant(r[2].d) == octant(r[0].d) && octant(r[3].d) == octant(r[0].d)) {
-			struct hit hh[4]; /* closest hits, a whole packet of one octant */
-			bool hit[4];
-			accel_intersect4(c->a, r, hh, hit);
+			vec3 t[4];
+			uint32_t obj[4];
+			for (int j = 0; j < 4; j++)
+				obj[j] = depth ? sf[who[j]].obj : SHADE_HINT_ANY;
+			walk_packet(c, r, l->position, i, obj, t);
 			for (int j = 0; j < 4; j++) {
 				pre[who[j]].tknown |= 1u << i;
-				if (hit[j]) {
-					pre[who[j]].thit |= 1u << i;
-					pre[who[j]].first[i] = hh[j];
-				}
+				pre[who[j]].tval[i] = t[j];
 			}
 			continue;
 		}
-		int q = 0; /* those that cross are left to direct() */
+		int q = 0; /* those that may cross are left to direct() */
 		for (int j = 0; j < m; j++)
 			if (!cross[j]) {
 				r[q] = r[j];
 				who[q++] = who[j];
 			}
-		m = q;
-		if (!m)
-			continue;
-		occlusion_packet(c, i, r, who, m, pre);
+		if (q)
+			occlusion_packet(c, i, r, who, q, pre);
 	}
 }
 
@@ -1164,7 +1257,7 @@ static void block_shade(const struct shade_ctx *c, const struct ray r[4], const 
  * trace_hit of n <= 4 rays r[k] whose closest hits are h[k] (NULL: a miss,
  * black), into out[k], in a scene with transparent materials. The hits'
  * shadow rays go as packets (shadow_packets_transparent, with room for
- * their first hits) at every depth: the rays of a block that came through
+ * their transmittances) at every depth: the rays of a block that came through
  * a flat patch of glass are as coherent as the eye rays' (gears_s2 -3.9%
  * against packets for the eye hits alone, docs/performance.md round 11).
  */
@@ -1177,10 +1270,10 @@ static __attribute__((noinline)) void block_hits(const struct shade_ctx *c, cons
 	for (int k = 0; k < n; k++)
 		ok[k] = h[k] && surf_prepare(c, &r[k], h[k], &sf[k]);
 	struct shadow_pre pre[4];
-	struct hit first[4][SHADE_PRE_TLIGHTS];
+	vec3 tval[4][SHADE_PRE_TLIGHTS];
 	for (int k = 0; k < 4; k++)
-		pre[k].first = first[k];
-	shadow_packets_transparent(c, sf, ok, n, pre);
+		pre[k].tval = tval[k];
+	shadow_packets_transparent(c, sf, ok, n, depth, pre);
 	block_shade(c, r, sf, ok, n, depth, weight, seed, pre, out);
 }
 
