@@ -571,22 +571,21 @@ static bool twalk_cross(const struct shade_ctx *c, struct twalk *w, struct hit *
 	return false;
 }
 
-/* The end of walk w when its segment can meet no transparent surface
- * (TRANSPARENT BOXES): true, the answer in *out, from an any-hit query
- * with light i's hint for object obj. */
-static bool twalk_opaque(const struct shade_ctx *c, const struct twalk *w, uint32_t i, uint32_t obj, vec3 *out)
+/* The answer of walk w whose segment meets no transparent surface
+ * (TRANSPARENT BOXES): an any-hit query, with light i's hint for object
+ * obj. */
+static vec3 twalk_end(const struct shade_ctx *c, const struct twalk *w, uint32_t i, uint32_t obj)
 {
-	if (may_cross_transparent(c, &w->r))
-		return false;
-	*out = accel_occluded_hint(c->a, &w->r, light_hint(c, i, obj)) ? v3(0, 0, 0) : w->t;
-	return true;
+	return accel_occluded_hint(c->a, &w->r, light_hint(c, i, obj)) ? v3(0, 0, 0) : w->t;
 }
 
 /* One step of walk w alone; twalk_cross's result. */
 static bool twalk_next(const struct shade_ctx *c, struct twalk *w, vec3 lp, uint32_t i, uint32_t obj, vec3 *out)
 {
-	if (twalk_opaque(c, w, i, obj, out))
+	if (!may_cross_transparent(c, &w->r)) {
+		*out = twalk_end(c, w, i, obj);
 		return true;
+	}
 	struct hit h;
 	return twalk_cross(c, w, accel_intersect(c->a, &w->r, &h) ? &h : NULL, lp, out);
 }
@@ -1056,9 +1055,10 @@ static void shadow_packets(const struct shade_ctx *c, const struct surf sf[4], c
  * (at lp) as four walks in step, into t[j]: their first closest hits as
  * one packet; then each round, the walks still going that may meet a
  * transparent surface go together when they are two or more of one octant
- * (accel_intersect4, lanes past them repeating the last), else one by one.
- * obj[j]: the object walk j starts from, for the hint of the any-hit query
- * that ends a walk whose segment meets no transparent surface.
+ * (accel_intersect4, lanes past them repeating the last), else one by one;
+ * the walks whose segments meet none end in any-hit queries, as one
+ * packet when they are two or more (accel_occluded4, with the first's
+ * hint; obj[j]: the object walk j starts from).
  */
 static void walk_packet(const struct shade_ctx *c, const struct ray r[4], vec3 lp, uint32_t i, const uint32_t obj[4],
 			vec3 t[4])
@@ -1098,9 +1098,23 @@ static void walk_packet(const struct shade_ctx *c, const struct ray r[4], vec3 l
 			return;
 		}
 		m = 0;
-		for (int k = 0; k < q; k++)
-			if (!twalk_opaque(c, &w[who[k]], i, obj[who[k]], &t[who[k]]))
+		int ends[4], e = 0; /* the walks whose segments meet no transparent surface */
+		for (int k = 0; k < q; k++) {
+			if (may_cross_transparent(c, &w[who[k]].r))
 				who[m++] = who[k];
+			else
+				ends[e++] = who[k];
+		}
+		if (e >= 2) { /* their any-hit queries as one packet */
+			for (int k = 0; k < 4; k++)
+				pr[k] = w[ends[k < e ? k : e - 1]].r;
+			bool occ[4];
+			accel_occluded4(c->a, pr, occ, light_hint(c, i, obj[ends[0]]));
+			for (int k = 0; k < e; k++)
+				t[ends[k]] = occ[k] ? v3(0, 0, 0) : w[ends[k]].t;
+		} else if (e) {
+			t[ends[0]] = twalk_end(c, &w[ends[0]], i, obj[ends[0]]);
+		}
 		if (!m)
 			return;
 	}
