@@ -61,7 +61,8 @@ struct shade_ctx {
 	bool any_transparent; /* some material has transparency > 0 */
 	/* PLAIN MATERIALS: shader_eval's result (but n) for each of the first
 	 * SHADE_PLAIN materials without a shader (bit i of plain_ok) and for the
-	 * default material, made once: shading points at them */
+	 * default material, made once: shading points and the surfaces a shadow
+	 * walk crosses (twalk_cross) point at them */
 	uint64_t plain_ok;
 	struct shader_mat plain[SHADE_PLAIN], plain_default;
 	/* TRANSPARENT BOXES: when tbox_all, every surface whose material may be
@@ -518,6 +519,15 @@ static vec3 light_point(const struct shade_light *L, int k, int n, double r1, do
 	}
 }
 
+/* The context's evaluation of a material without a shader (PLAIN
+ * MATERIALS), or NULL when shader_eval must evaluate it at the point. */
+static inline const struct shader_mat *plain_mat(const struct shade_ctx *c, uint32_t material)
+{
+	if (material >= c->s->n_materials) /* SCENE_NONE too: the default material */
+		return &c->plain_default;
+	return material < SHADE_PLAIN && (c->plain_ok >> material & 1) ? &c->plain[material] : NULL;
+}
+
 /* Whether a hit on material needs its u, v and mp: only shaders read them,
  * and a material without one is evaluated without looking at them
  * (shader_eval). */
@@ -555,15 +565,19 @@ static bool twalk_cross(const struct shade_ctx *c, struct twalk *w, struct hit *
 		*out = w->t;
 		return true;
 	}
-	need_surface(c, h);
-	struct shader_point pt = { h->mp, h->u, h->v, h->n };
-	struct shader_mat m;
-	shader_eval(c->s, h->material, &pt, &m);
-	double td = fmin(m.transparency, 1.0);
+	struct shader_mat own;
+	const struct shader_mat *m = plain_mat(c, h->material); /* PLAIN MATERIALS */
+	if (!m) {
+		need_surface(c, h);
+		struct shader_point pt = { h->mp, h->u, h->v, h->n };
+		shader_eval(c->s, h->material, &pt, &own);
+		m = &own;
+	}
+	double td = fmin(m->transparency, 1.0);
 	*out = v3(0, 0, 0);
 	if (!(td > 0))
 		return true;
-	w->t = v3_scale(v3_mul(w->t, v3_max(m.tran_colour, v3(0, 0, 0))), td);
+	w->t = v3_scale(v3_mul(w->t, v3_max(m->tran_colour, v3(0, 0, 0))), td);
 	if (maxc(w->t) < SHADE_MIN_WEIGHT || ++w->n >= LIM_SHADOW_HITS)
 		return true;
 	w->r.o = offset(h->p, h->ng, w->r.d);
@@ -758,14 +772,6 @@ struct surf {
 	uint32_t obj;        /* the object hit (LAST-BLOCKER HINTS' key) */
 };
 
-/* The context's evaluation of a material without a shader (PLAIN
- * MATERIALS), or NULL when shader_eval must evaluate it at the point. */
-static inline const struct shader_mat *plain_mat(const struct shade_ctx *c, uint32_t material)
-{
-	if (material >= c->s->n_materials) /* SCENE_NONE too: the default material */
-		return &c->plain_default;
-	return material < SHADE_PLAIN && (c->plain_ok >> material & 1) ? &c->plain[material] : NULL;
-}
 
 /* The first half of trace_hit: false when the hit cannot be shaded (black).
  * The hit is read in place, field by field, and copied only when a shader
