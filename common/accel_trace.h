@@ -359,9 +359,11 @@ static inline bool hint_occludes(const struct accel *A, const struct group *g, u
  * one triangle, with its own S, so the
  * same bound holds for both uses of the four lanes:
  *   - one ray against a leaf block's up to four triangles (LEAF BLOCKS,
- *     accel_int.h): single rays, closest and any hit, and the packets'
- *     leaves met by one ray or traced for any hit;
- *   - one triangle against a packet's four rays (tri4_reject).
+ *     accel_int.h): single rays, closest and any hit, and the closest-hit
+ *     packets' leaves met by one ray;
+ *   - one triangle against a packet's four rays (tri4_reject): the
+ *     closest-hit packets' leaves, and the any-hit packets' in groups of
+ *     mostly triangles.
  * The floats are the same either way: a block holds each vertex component
  * rounded to nearest and the lane's largest magnitude, computed at build
  * time as the packets computed them when they gathered the vertices. The
