@@ -845,6 +845,10 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	for (uint32_t k = 0; k < g->bvh.n_nodes4; k++)
 		for (int c = 0; c < 4; c++)
 			g->big_leaf |= g->bvh.nodes[k].n[c] > ACCEL_LEAF_CHUNK;
+	/* a few triangles among other primitives are mostly a floor, which
+	 * every shadow ray of a hit on it meets and no pre-test rejects
+	 * (docs/performance.md, round 11) */
+	g->occ_pretest = g->n_tri >= 3 * ((uint64_t)g->n_sph + g->n_xp + g->n_inst);
 	if (inst_only) { /* bounded instances in leaf order, then the unbounded ones */
 		int orc = order_instances(g, all, perm, n_bounded);
 		if (orc == ACCEL_CANCELLED)

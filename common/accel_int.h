@@ -143,6 +143,8 @@ struct group {
 					  untransformed plane (tested inline), else NULL */
 	bool big_leaf;  /* some leaf has more than ACCEL_LEAF_CHUNK references:
 			   no packets through this group (accel_packet.c) */
+	bool occ_pretest; /* mostly triangles: the any-hit packets' leaf blocks
+			     take the TRIANGLE PRE-TEST (bvh_occluded4) */
 	vec3 center;    /* node bounds are relative to this point */
 	size_t bytes;
 };

@@ -713,11 +713,8 @@ static inline __attribute__((always_inline)) void bvh_occluded4(const struct acc
 	unsigned act = *active, lanes = act;
 	uint32_t idx = 0, n = 0;
 	uint32_t polls = ACCEL_POLL_POPS;
-	/* TRIANGLE PRE-TEST in a group of mostly triangles (a mesh, polygons),
-	 * set up at the first block two rays meet: a few triangles among many
-	 * other primitives are mostly floors, which every shadow ray of a hit
-	 * on them meets and no pre-test rejects (docs/performance.md, round 11) */
-	const bool pre = g->n_tri >= 3 * ((uint64_t)g->n_sph + g->n_xp + g->n_inst);
+	/* TRIANGLE PRE-TEST where g->occ_pretest, set up at the first block two
+	 * rays meet */
 	struct tri4 q;
 	bool q_ready = false;
 	for (;;) {
@@ -727,7 +724,7 @@ static inline __attribute__((always_inline)) void bvh_occluded4(const struct acc
 			for (uint32_t k = 0; k < nt && (lanes &= act); k++) {
 				uint32_t ref = blk_ref(tb, nt, k);
 				unsigned test = lanes;
-				if (pre && (test & (test - 1))) {
+				if (g->occ_pretest && (test & (test - 1))) {
 					if (!q_ready) {
 						tri4_init(&q, tr);
 						q_ready = true;

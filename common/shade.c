@@ -586,8 +586,8 @@ static bool twalk_cross(const struct shade_ctx *c, struct twalk *w, struct hit *
 }
 
 /* The answer of walk w whose segment meets no transparent surface
- * (TRANSPARENT BOXES): an any-hit query, with light i's hint for object
- * obj. */
+ * (TRANSPARENT BOXES, or a scene without any): an any-hit query, with
+ * light i's hint for object obj. */
 static vec3 twalk_end(const struct shade_ctx *c, const struct twalk *w, uint32_t i, uint32_t obj)
 {
 	return accel_occluded_hint(c->a, &w->r, light_hint(c, i, obj)) ? v3(0, 0, 0) : w->t;
@@ -613,12 +613,11 @@ static bool twalk_next(const struct shade_ctx *c, struct twalk *w, vec3 lp, uint
 static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp, uint32_t light, const struct shadow_pre *pre,
 			  uint32_t obj)
 {
-	struct ray r = { o, v3_sub(lp, o), 0, 1 };
+	struct twalk w = { { o, v3_sub(lp, o), 0, 1 }, v3(1, 1, 1), 0 };
 	if (!c->any_transparent)
-		return accel_occluded_hint(c->a, &r, light_hint(c, light, obj)) ? v3(0, 0, 0) : v3(1, 1, 1);
+		return twalk_end(c, &w, light, obj);
 	if (pre && light < SHADE_PRE_TLIGHTS && (pre->tknown >> light & 1))
 		return pre->tval[light];
-	struct twalk w = { r, v3(1, 1, 1), 0 };
 	vec3 out;
 	do {
 		if (w.n && cancel_poll()) /* CANCELLATION: shaders may be costly */
@@ -976,6 +975,27 @@ static unsigned octant(vec3 d)
 	return (unsigned)!!signbit(d.x) | (unsigned)!!signbit(d.y) << 1 | (unsigned)!!signbit(d.z) << 2;
 }
 
+/* Lanes m..3 of r repeat ray m - 1 (1 <= m <= 4): a packet of m rays. */
+static inline void pad_packet(struct ray r[4], int m)
+{
+	for (int k = m; k < 4; k++)
+		r[k] = r[m - 1];
+}
+
+/* The closest hits of rays r[0 .. n-1]: as one packet when packet
+ * (pad_packet overwrites lanes n..3; accel_intersect4), else one by one. */
+static inline void closest_hits(const struct shade_ctx *c, struct ray r[4], int n, bool packet, struct hit hh[4],
+				bool hit[4])
+{
+	if (packet) {
+		pad_packet(r, n);
+		accel_intersect4(c->a, r, hh, hit);
+		return;
+	}
+	for (int k = 0; k < n; k++)
+		hit[k] = accel_intersect(c->a, &r[k], &hh[k]);
+}
+
 /* The shadow rays r[0 .. m-1] toward point light i (at lp) from the
  * prepared hits (ok[k]) that direct() traces, hit who[j] for ray j;
  * returns m. The ways to the light are pre[k]'s when known, and are made
@@ -1027,8 +1047,7 @@ static bool packet_light(const struct shade_ctx *c, uint32_t i)
 static void occlusion_packet(const struct shade_ctx *c, uint32_t i, struct ray r[4], const int who[4], int m,
 			     struct shadow_pre pre[4])
 {
-	for (int j = m; j < 4; j++)
-		r[j] = r[m - 1];
+	pad_packet(r, m);
 	bool occ[4];
 	accel_occluded4(c->a, r, occ, light_hint(c, i, SHADE_HINT_ANY));
 	for (int j = 0; j < m; j++) {
@@ -1080,18 +1099,12 @@ static void walk_packet(const struct shade_ctx *c, const struct ray r[4], vec3 l
 		struct hit hh[4];
 		bool hit[4];
 		bool one = m >= 2;
+		unsigned oct = octant(w[who[0]].r.d);
 		for (int k = 0; k < m; k++) {
 			pr[k] = w[who[k]].r;
-			one &= octant(pr[k].d) == octant(pr[0].d);
+			one &= octant(pr[k].d) == oct;
 		}
-		if (one) {
-			for (int k = m; k < 4; k++)
-				pr[k] = pr[m - 1];
-			accel_intersect4(c->a, pr, hh, hit);
-		} else {
-			for (int k = 0; k < m; k++)
-				hit[k] = accel_intersect(c->a, &pr[k], &hh[k]);
-		}
+		closest_hits(c, pr, m, one, hh, hit);
 		int q = 0; /* the walks going on */
 		for (int k = 0; k < m; k++) {
 			int j = who[k];
@@ -1112,8 +1125,9 @@ static void walk_packet(const struct shade_ctx *c, const struct ray r[4], vec3 l
 				ends[e++] = who[k];
 		}
 		if (e >= 2) { /* their any-hit queries as one packet */
-			for (int k = 0; k < 4; k++)
-				pr[k] = w[ends[k < e ? k : e - 1]].r;
+			for (int k = 0; k < e; k++)
+				pr[k] = w[ends[k]].r;
+			pad_packet(pr, e);
 			bool occ[4];
 			accel_occluded4(c->a, pr, occ, light_hint(c, i, obj[ends[0]]));
 			for (int k = 0; k < e; k++)
@@ -1310,14 +1324,7 @@ static void block_trace(const struct shade_ctx *c, struct ray r[4], int n, int d
 		one &= octant(r[k].d) == oct && v3_dot(r[k].d, r[0].d) >= SHADE_PACKET_COS;
 	struct hit hh[4];
 	bool hit[4];
-	if (one) {
-		for (int k = n; k < 4; k++)
-			r[k] = r[n - 1];
-		accel_intersect4(c->a, r, hh, hit);
-	} else {
-		for (int k = 0; k < n; k++)
-			hit[k] = accel_intersect(c->a, &r[k], &hh[k]);
-	}
+	closest_hits(c, r, n, one, hh, hit);
 	const struct hit *hp[4] = { NULL, NULL, NULL, NULL };
 	for (int k = 0; k < n; k++)
 		hp[k] = hit[k] ? &hh[k] : NULL;

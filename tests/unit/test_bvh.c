@@ -878,6 +878,36 @@ static void big_leaf(void)
  * bit.
  */
 #define EDGE_GRID 6
+
+/* n rays (4, 16 or 64) from o, in packets of four aimed at target and, h
+ * apart, its neighbours (packet p at (p & 1) + 2 (p >> 2 & 1) steps across
+ * and (p >> 1 & 1) + 2 (p >> 3) up: the renderer's order of 2x2 blocks),
+ * each ray e off its point along a diagonal. */
+static void aim_packets(struct ray *r, int n, vec3 o, vec3 target, double h, double e)
+{
+	for (int l = 0; l < n; l++) {
+		int p = l >> 2;
+		vec3 tp = v3_add(target, v3(h * ((p & 1) + 2 * (p >> 2 & 1)), h * ((p >> 1 & 1) + 2 * (p >> 3)), 0));
+		vec3 tl = v3_add(tp, v3(e * ((l & 1) ? 1 : -1), e * ((l & 2) ? 1 : -1), 0));
+		r[l] = (struct ray){ o, v3_sub(tl, o), 0, INFINITY };
+	}
+}
+
+/* How many of the n packet answers (hit[l], h[l]) differ from
+ * accel_intersect's for r[l]; the single rays' hits are added to *hits. */
+static int unlike_single(const struct accel *a, const struct ray *r, const struct hit *h, const bool *hit, int n,
+			 int *hits)
+{
+	int mismatch = 0;
+	for (int l = 0; l < n; l++) {
+		struct hit h1;
+		bool b1 = accel_intersect(a, &r[l], &h1);
+		mismatch += !same_hit(b1, &h1, hit[l], &h[l]);
+		*hits += b1;
+	}
+	return mismatch;
+}
+
 static void tri_margins(void)
 {
 	for (int far = 0; far < 2; far++) {
@@ -909,52 +939,22 @@ static void tri_margins(void)
 			vec3 o = v3(x0 + 2 * rng_uniform(31, 3ull * k + 2) - 0.5, 1.5 * rng_uniform(32, k) - 0.25,
 				    0.5 + 2 * rng_uniform(33, k));
 			double e = offs[k % 5];
-			struct ray r[4];
-			for (int l = 0; l < 4; l++) {
-				vec3 tl = v3_add(target, v3(e * ((l & 1) ? 1 : -1), e * ((l & 2) ? 1 : -1), 0));
-				r[l] = (struct ray){ o, v3_sub(tl, o), 0, INFINITY };
-			}
-			struct hit h4[4], h1;
-			bool hit4[4];
-			accel_intersect4(a, r, h4, hit4);
-			for (int l = 0; l < 4; l++) {
-				bool b1 = accel_intersect(a, &r[l], &h1);
-				mismatch += !same_hit(b1, &h1, hit4[l], &h4[l]);
-				hits += b1;
-			}
-			/* the same four, and three packets aimed at the neighbouring
-			 * vertices or midpoints, as one accel_intersect16 */
-			struct ray r16[16];
-			struct hit h16[16];
-			bool hit16[16];
-			for (int l = 0; l < 16; l++) {
-				vec3 tp = v3_add(target, v3(h * (l >> 2 & 1), h * (l >> 3), 0));
-				vec3 tl = v3_add(tp, v3(e * ((l & 1) ? 1 : -1), e * ((l & 2) ? 1 : -1), 0));
-				r16[l] = (struct ray){ o, v3_sub(tl, o), 0, INFINITY };
-			}
-			accel_intersect16(a, r16, h16, hit16);
-			for (int l = 0; l < 16; l++) {
-				bool b1 = accel_intersect(a, &r16[l], &h1);
-				mismatch += !same_hit(b1, &h1, hit16[l], &h16[l]);
-				hits16 += b1;
-			}
-			/* sixteen packets aimed at a 4x4 patch of such points, as one
-			 * accel_intersect64 */
-			struct ray r64[64];
-			struct hit h64[64];
-			bool hit64[64];
-			for (int l = 0; l < 64; l++) {
-				int p = l >> 2;
-				vec3 tp = v3_add(target, v3(h * ((p & 1) + 2 * (p >> 2 & 1)), h * ((p >> 1 & 1) + 2 * (p >> 3)), 0));
-				vec3 tl = v3_add(tp, v3(e * ((l & 1) ? 1 : -1), e * ((l & 2) ? 1 : -1), 0));
-				r64[l] = (struct ray){ o, v3_sub(tl, o), 0, INFINITY };
-			}
-			accel_intersect64(a, r64, h64, hit64);
-			for (int l = 0; l < 64; l++) {
-				bool b1 = accel_intersect(a, &r64[l], &h1);
-				mismatch += !same_hit(b1, &h1, hit64[l], &h64[l]);
-				hits64 += b1;
-			}
+			/* four rays at the point, as one accel_intersect4; the same
+			 * four and three packets aimed at the neighbouring vertices or
+			 * midpoints, as one accel_intersect16; sixteen packets aimed at
+			 * a 4x4 patch of such points, as one accel_intersect64 */
+			struct ray r[64];
+			struct hit hp[64];
+			bool hit[64];
+			aim_packets(r, 4, o, target, h, e);
+			accel_intersect4(a, r, hp, hit);
+			mismatch += unlike_single(a, r, hp, hit, 4, &hits);
+			aim_packets(r, 16, o, target, h, e);
+			accel_intersect16(a, r, hp, hit);
+			mismatch += unlike_single(a, r, hp, hit, 16, &hits16);
+			aim_packets(r, 64, o, target, h, e);
+			accel_intersect64(a, r, hp, hit);
+			mismatch += unlike_single(a, r, hp, hit, 64, &hits64);
 		}
 		printf("triangle pre-test margins (%s): 16000 rays in fours, 64000 in sixteens, 256000 in sixty-fours, %d, %d and %d hits, %d unlike single rays\n",
 		       far ? "1000 units away" : "at the origin", hits, hits16, hits64, mismatch);
