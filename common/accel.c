@@ -349,11 +349,30 @@ __attribute__((noinline)) bool accel_xprim_test(const struct geom_obj *go, uint3
 	}
 	double t;
 	int part;
-	if (!geom_intersect(go, o, d, r->tmin, r->tmax, &t, &part) || !cand_better(c, ref, t))
+	bool hit = go->kind == PRIM_CYLINDER && !go->u.cyl.capped
+			   ? geom_cyl_open_hit(go, o, d, r->tmin, r->tmax, &t, &part)
+			   : geom_intersect(go, o, d, r->tmin, r->tmax, &t, &part);
+	if (!hit || !cand_better(c, ref, t))
 		return false;
 	c->part = part;
 	cand_take(c, r, ref, t);
 	return true;
+}
+
+/* ref_occludes of a simple xprim (not CSG): accel_xprim_test's answer
+ * without a candidate, kept out of the traversal loops as it is. */
+__attribute__((noinline)) bool accel_xprim_occludes(const struct geom_obj *go, const struct trace *r)
+{
+	vec3 o = r->o, d = r->d;
+	if (go->has_xform) {
+		o = m34_point(&go->inv, o);
+		d = m34_dir(&go->inv, d);
+	}
+	double t;
+	int part;
+	if (go->kind == PRIM_CYLINDER && !go->u.cyl.capped) /* the common xprim, inline */
+		return geom_cyl_open_hit(go, o, d, r->tmin, r->tmax, &t, &part);
+	return geom_intersect(go, o, d, r->tmin, r->tmax, &t, &part);
 }
 
 __attribute__((noinline)) bool accel_ref_test_slow(const struct accel *A, const struct group *g, uint32_t ref,

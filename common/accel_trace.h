@@ -142,10 +142,12 @@ static inline void cand_take(struct cand *c, struct trace *r, uint32_t ref, doub
 
 /* Defined in accel.c, called from both files: accel_xprim_test and
  * accel_ref_test_slow are ref_test's rarer kinds, kept out of the traversal
- * loops; accel_inst_occluded is ref_occludes' instances, accel_unb_hit
+ * loops; accel_xprim_occludes and accel_inst_occluded are ref_occludes'
+ * xprims and instances, accel_unb_hit
  * group_hit_unbounded's list; accel_finish completes the closest hit
  * (group_hit, group_hit4). */
 bool accel_xprim_test(const struct geom_obj *go, uint32_t ref, struct trace *r, struct cand *c);
+bool accel_xprim_occludes(const struct geom_obj *go, const struct trace *r);
 bool accel_ref_test_slow(const struct accel *A, const struct group *g, uint32_t ref, struct trace *r,
 			 struct cand *c, bool brute);
 bool accel_inst_occluded(const struct accel *A, const struct ginst *in, const struct trace *r);
@@ -259,13 +261,7 @@ static inline bool ref_occludes(const struct accel *A, const struct group *g, ui
 		const struct geom_obj *go = g->xp[i].g;
 		if (go->kind == PRIM_CSG)
 			break;
-		vec3 o = r->o, d = r->d;
-		if (go->has_xform) {
-			o = m34_point(&go->inv, o);
-			d = m34_dir(&go->inv, d);
-		}
-		int part;
-		return geom_intersect(go, o, d, r->tmin, r->tmax, &t, &part);
+		return accel_xprim_occludes(go, r);
 	}
 	}
 	struct cand c;

@@ -344,33 +344,6 @@ struct geom_box geom_obj_local_bounds(const struct scene *s, const struct geom_o
 
 /* ---- quadric and slab helpers ------------------------------------------------------ */
 
-/*
- * Roots of |oc + t d|^2 = r2 restricted to the components perpendicular to
- * nothing (plain sphere) in a cancellation-resistant form: t0 <= t1.
- * These helpers are inlined into geom_intersect: a cylinder test made
- * three calls (5% of rings_s3's instructions; the arithmetic is the same,
- * and -ffp-contract=off keeps it so).
- */
-static inline __attribute__((always_inline)) bool sphere_roots(vec3 oc, vec3 d, double r2, double *t0, double *t1)
-{
-	double a = v3_dot(d, d);
-	if (!(a > 0))
-		return false;
-	double b = v3_dot(oc, d);
-	double tc = -b / a;
-	vec3 f = v3_add(oc, v3_scale(d, tc)); /* closest point of the line to the centre */
-	double h2 = (r2 - v3_dot(f, f)) / a;
-	if (h2 < 0)
-		return false;
-	double h = sqrt(h2);
-	double c = v3_dot(oc, oc) - r2;
-	double q = tc + (tc >= 0 ? h : -h); /* larger magnitude root */
-	double other = q != 0 ? (c / a) / q : 0;
-	*t0 = geom_fmin(q, other);
-	*t1 = geom_fmax(q, other);
-	return true;
-}
-
 /* Infinite cylinder side roots (axis through `from` along unit a). Returns
  * 0 miss, 1 roots in t0 <= t1, 2 the whole line is inside (parallel ray). */
 static inline __attribute__((always_inline)) int cyl_side_roots(const struct geom_obj *g, vec3 o, vec3 d, double *t0,
@@ -381,9 +354,11 @@ static inline __attribute__((always_inline)) int cyl_side_roots(const struct geo
 	vec3 op = v3_sub(oc, v3_scale(a, v3_dot(oc, a)));
 	vec3 dp = v3_sub(d, v3_scale(a, v3_dot(d, a)));
 	double r2 = g->u.cyl.r * g->u.cyl.r;
+	if (geom_tube_misses(op, dp, r2)) /* TUBE PRE-REJECT: side 0, as below */
+		return 0;
 	if (v3_dot(dp, dp) <= 1e-30 * v3_dot(d, d))
 		return v3_dot(op, op) <= r2 ? 2 : 0;
-	return sphere_roots(op, dp, r2, t0, t1) ? 1 : 0;
+	return geom_sphere_roots(op, dp, r2, t0, t1) ? 1 : 0;
 }
 
 /* Slab 0 <= (p - from).a <= h: 0 miss, 1 [t0, t1] with parts, 2 whole line. */
@@ -501,7 +476,7 @@ bool geom_intersect(const struct geom_obj *g, vec3 o, vec3 d, double tmin, doubl
 	switch (g->kind) {
 	case PRIM_SPHERE: {
 		double r = g->u.sph.r;
-		if (!sphere_roots(v3_sub(o, g->u.sph.c), d, r * r, &t0, &t1))
+		if (!geom_sphere_roots(v3_sub(o, g->u.sph.c), d, r * r, &t0, &t1))
 			return false;
 		break;
 	}
@@ -534,24 +509,7 @@ bool geom_intersect(const struct geom_obj *g, vec3 o, vec3 d, double tmin, doubl
 			if (!cyl_solid(g, o, d, &t0, &t1, &p0, &p1))
 				return false;
 		} else {
-			/* open: side hits between the caps, seen from both sides;
-			 * one set of dot products, the caps by the axial coordinate */
-			vec3 a = g->u.cyl.a, oc = v3_sub(o, g->u.cyl.from);
-			double z0 = v3_dot(oc, a), dz = v3_dot(d, a);
-			vec3 op = v3_sub(oc, v3_scale(a, z0)), dp = v3_sub(d, v3_scale(a, dz));
-			double r2 = g->u.cyl.r * g->u.cyl.r;
-			if (v3_dot(dp, dp) <= 1e-30 * v3_dot(d, d) || !sphere_roots(op, dp, r2, &t0, &t1))
-				return false; /* parallel to the axis: only the (open) ends */
-			double za = z0 + t0 * dz, zb = z0 + t1 * dz, h = g->u.cyl.h;
-			if (za >= 0 && za <= h && in_range(t0, tmin, tmax)) {
-				*t = t0, *part = GEOM_PART_MAIN;
-				return true;
-			}
-			if (zb >= 0 && zb <= h && in_range(t1, tmin, tmax)) {
-				*t = t1, *part = GEOM_PART_MAIN;
-				return true;
-			}
-			return false;
+			return geom_cyl_open_hit(g, o, d, tmin, tmax, t, part);
 		}
 		break;
 	default:
@@ -578,7 +536,7 @@ int geom_crossings(const struct geom_obj *g, vec3 o, vec3 d, struct geom_cross1 
 	switch (g->kind) {
 	case PRIM_SPHERE: {
 		double r = g->u.sph.r;
-		if (!sphere_roots(v3_sub(o, g->u.sph.c), d, r * r, &t0, &t1))
+		if (!geom_sphere_roots(v3_sub(o, g->u.sph.c), d, r * r, &t0, &t1))
 			return 0;
 		break;
 	}

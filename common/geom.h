@@ -140,6 +140,83 @@ int geom_crossings(const struct geom_obj *g, vec3 o, vec3 d, struct geom_cross1 
 static inline double geom_fmin(double x, double y) { return x < y || y != y ? x : y; }
 static inline double geom_fmax(double x, double y) { return x > y || y != y ? x : y; }
 
+/* ---- quadrics: spheres and cylinders ------------------------------------------- */
+
+/*
+ * Roots of |oc + t d|^2 = r2 in a cancellation-resistant form: t0 <= t1;
+ * false when the line misses (or d is 0). Inline wherever it is used: a
+ * cylinder test made three calls (5% of rings_s3's instructions).
+ */
+static inline __attribute__((always_inline)) bool geom_sphere_roots(vec3 oc, vec3 d, double r2, double *t0,
+								     double *t1)
+{
+	double a = v3_dot(d, d);
+	if (!(a > 0))
+		return false;
+	double b = v3_dot(oc, d);
+	double tc = -b / a;
+	vec3 f = v3_add(oc, v3_scale(d, tc)); /* closest point of the line to the centre */
+	double h2 = (r2 - v3_dot(f, f)) / a;
+	if (h2 < 0)
+		return false;
+	double h = sqrt(h2);
+	double c = v3_dot(oc, oc) - r2;
+	double q = tc + (tc >= 0 ? h : -h); /* larger magnitude root */
+	double other = q != 0 ? (c / a) / q : 0;
+	*t0 = geom_fmin(q, other);
+	*t1 = geom_fmax(q, other);
+	return true;
+}
+
+/*
+ * TUBE PRE-REJECT: true only when geom_sphere_roots(op, dp, r2) is
+ * certainly false, found without its two divisions and root. With A =
+ * dp.dp, B = op.dp, O = op.op (the products it forms), the line misses
+ * exactly when A (|f|^2 - r2) = (O - r2) A - B^2 = M > 0. Each rounded
+ * product and sum here and there errs by at most about 25 u (O + r2) A
+ * in M (u = 2^-53; |f| <= |op| bounds the cancellation in f), so a margin
+ * of 1e-9 (O + r2) A leaves the answer the same bit for bit whatever the
+ * rounding; below 2^-900 or at infinity it answers false. Most rays that
+ * reach a cylinder's box pass its tube at a distance (31% of rings_s3's
+ * tests), so this is a cylinder test's usual end (docs/performance.md).
+ */
+static inline bool geom_tube_misses(vec3 op, vec3 dp, double r2)
+{
+	double A = v3_dot(dp, dp), B = v3_dot(op, dp), O = v3_dot(op, op);
+	double m = 1e-9 * ((O + r2) * A), M = (O - r2) * A - B * B;
+	return M > m && m > 0x1p-900 && M < INFINITY;
+}
+
+/*
+ * geom_intersect of an open cylinder (g->kind PRIM_CYLINDER, not capped),
+ * object-space ray: the side between the caps, seen from both sides. Inline
+ * here so that the traversals' xprim tests (accel.c) reach it without
+ * geom_intersect's call and switch; the same arithmetic either way.
+ */
+static inline __attribute__((always_inline)) bool geom_cyl_open_hit(const struct geom_obj *g, vec3 o, vec3 d,
+								     double tmin, double tmax, double *t,
+								     int *part)
+{
+	/* one set of dot products, the caps by the axial coordinate */
+	vec3 a = g->u.cyl.a, oc = v3_sub(o, g->u.cyl.from);
+	double z0 = v3_dot(oc, a), dz = v3_dot(d, a);
+	vec3 op = v3_sub(oc, v3_scale(a, z0)), dp = v3_sub(d, v3_scale(a, dz));
+	double r2 = g->u.cyl.r * g->u.cyl.r, t0, t1;
+	if (geom_tube_misses(op, dp, r2) || v3_dot(dp, dp) <= 1e-30 * v3_dot(d, d) ||
+	    !geom_sphere_roots(op, dp, r2, &t0, &t1))
+		return false; /* parallel to the axis: only the (open) ends */
+	double za = z0 + t0 * dz, zb = z0 + t1 * dz, h = g->u.cyl.h;
+	if (za >= 0 && za <= h && t0 > tmin && t0 < tmax) {
+		*t = t0, *part = GEOM_PART_MAIN;
+		return true;
+	}
+	if (zb >= 0 && zb <= h && t1 > tmin && t1 < tmax) {
+		*t = t1, *part = GEOM_PART_MAIN;
+		return true;
+	}
+	return false;
+}
+
 /* ---- watertight ray/triangle (Woop, Benthin, Wald 2013) ---------------- */
 
 struct geom_wray {
