@@ -339,19 +339,23 @@ bool accel_inst_occluded(const struct accel *A, const struct ginst *in, const st
 /* A simple primitive other than an untransformed sphere or a triangle (an
  * xprim that is not CSG): a small frame of its own, apart from the CSG and
  * instance paths. Same contract as ref_test. */
-__attribute__((noinline)) bool accel_xprim_test(const struct geom_obj *go, uint32_t ref, struct trace *r,
+__attribute__((noinline)) bool accel_xprim_test(const struct xprim *x, uint32_t ref, struct trace *r,
 						struct cand *c)
 {
-	vec3 o = r->o, d = r->d;
-	if (go->has_xform) {
-		o = m34_point(&go->inv, o);
-		d = m34_dir(&go->inv, d);
-	}
 	double t;
 	int part;
-	bool hit = go->kind == PRIM_CYLINDER && !go->u.cyl.capped
-			   ? geom_cyl_open_hit(go, o, d, r->tmin, r->tmax, &t, &part)
-			   : geom_intersect(go, o, d, r->tmin, r->tmax, &t, &part);
+	bool hit;
+	if (x->r > 0) { /* OPEN CYLINDERS */
+		hit = geom_cyl_open_hit(x->from, x->a, x->r, x->h, r->o, r->d, r->tmin, r->tmax, &t, &part);
+	} else {
+		const struct geom_obj *go = x->g;
+		vec3 o = r->o, d = r->d;
+		if (go->has_xform) {
+			o = m34_point(&go->inv, o);
+			d = m34_dir(&go->inv, d);
+		}
+		hit = geom_intersect(go, o, d, r->tmin, r->tmax, &t, &part);
+	}
 	if (!hit || !cand_better(c, ref, t))
 		return false;
 	c->part = part;
@@ -361,17 +365,18 @@ __attribute__((noinline)) bool accel_xprim_test(const struct geom_obj *go, uint3
 
 /* ref_occludes of a simple xprim (not CSG): accel_xprim_test's answer
  * without a candidate, kept out of the traversal loops as it is. */
-__attribute__((noinline)) bool accel_xprim_occludes(const struct geom_obj *go, const struct trace *r)
+__attribute__((noinline)) bool accel_xprim_occludes(const struct xprim *x, const struct trace *r)
 {
+	double t;
+	int part;
+	if (x->r > 0) /* OPEN CYLINDERS */
+		return geom_cyl_open_hit(x->from, x->a, x->r, x->h, r->o, r->d, r->tmin, r->tmax, &t, &part);
+	const struct geom_obj *go = x->g;
 	vec3 o = r->o, d = r->d;
 	if (go->has_xform) {
 		o = m34_point(&go->inv, o);
 		d = m34_dir(&go->inv, d);
 	}
-	double t;
-	int part;
-	if (go->kind == PRIM_CYLINDER && !go->u.cyl.capped) /* the common xprim, inline */
-		return geom_cyl_open_hit(go, o, d, r->tmin, r->tmax, &t, &part);
 	return geom_intersect(go, o, d, r->tmin, r->tmax, &t, &part);
 }
 
@@ -381,8 +386,8 @@ __attribute__((noinline)) bool accel_ref_test_slow(const struct accel *A, const 
 	uint32_t i = REF_IDX(ref);
 	if (REF_KIND(ref) == REF_XPRIM) {
 		const struct xprim *x = &g->xp[i];
-		if (x->g->kind != PRIM_CSG)
-			return accel_xprim_test(x->g, ref, r, c);
+		if (x->r > 0 || x->g->kind != PRIM_CSG)
+			return accel_xprim_test(x, ref, r, c);
 		struct hit hh;
 		if (!csg_hit(A->s, (struct geom_obj *const *)A->gobj, x->obj, r->o, r->d, r->tmin, r->tmax, &hh) ||
 		    !cand_better(c, ref, hh.t))

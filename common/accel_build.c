@@ -722,7 +722,14 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 		if (prc < 0)
 			goto oom;
 		struct xprim *xp = &g->xp[g->n_xp];
-		xp->g = A->gobj[oi];
+		*xp = (struct xprim){ .g = A->gobj[oi] };
+		if (xp->g->kind == PRIM_CYLINDER && !xp->g->u.cyl.capped && !xp->g->has_xform &&
+		    xp->g->u.cyl.r > 0) { /* OPEN CYLINDERS */
+			xp->from = xp->g->u.cyl.from;
+			xp->a = xp->g->u.cyl.a;
+			xp->r = xp->g->u.cyl.r;
+			xp->h = xp->g->u.cyl.h;
+		}
 		xp->obj = oi;
 		xp->mat = scene_full_at(s, oi)->material; /* an xprim: not an instance */
 		ref = REF_MAKE(REF_XPRIM, g->n_xp++);

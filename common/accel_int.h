@@ -67,7 +67,15 @@ struct gtri {
 	uint32_t mesh, tri;
 };
 
+/*
+ * OPEN CYLINDERS. An xprim that is an untransformed open cylinder (the
+ * SPD rings, 420 of them) carries its axis here, r > 0, and the
+ * traversals test it from this record (geom_cyl_open_hit): one record's
+ * cache lines instead of the geom_obj's four; r is 0 for every other xprim.
+ */
 struct xprim {
+	vec3 from, a; /* OPEN CYLINDERS: geom_obj.u.cyl's */
+	double r, h;
 	const struct geom_obj *g;
 	uint32_t obj;
 	uint32_t mat; /* the object's material (accel_finish reads no scene object) */

@@ -146,8 +146,8 @@ static inline void cand_take(struct cand *c, struct trace *r, uint32_t ref, doub
  * xprims and instances, accel_unb_hit
  * group_hit_unbounded's list; accel_finish completes the closest hit
  * (group_hit, group_hit4). */
-bool accel_xprim_test(const struct geom_obj *go, uint32_t ref, struct trace *r, struct cand *c);
-bool accel_xprim_occludes(const struct geom_obj *go, const struct trace *r);
+bool accel_xprim_test(const struct xprim *x, uint32_t ref, struct trace *r, struct cand *c);
+bool accel_xprim_occludes(const struct xprim *x, const struct trace *r);
 bool accel_ref_test_slow(const struct accel *A, const struct group *g, uint32_t ref, struct trace *r,
 			 struct cand *c, bool brute);
 bool accel_inst_occluded(const struct accel *A, const struct ginst *in, const struct trace *r);
@@ -233,9 +233,9 @@ static inline __attribute__((always_inline)) bool ref_test(const struct accel *A
 	case REF_TRI:
 		return tri_test(g, ref, r, c);
 	case REF_XPRIM: {
-		const struct geom_obj *go = g->xp[i].g;
-		if (go->kind != PRIM_CSG)
-			return accel_xprim_test(go, ref, r, c);
+		const struct xprim *x = &g->xp[i];
+		if (x->r > 0 || x->g->kind != PRIM_CSG) /* OPEN CYLINDERS read no geom_obj */
+			return accel_xprim_test(x, ref, r, c);
 		return accel_ref_test_slow(A, g, ref, r, c, brute);
 	}
 	default:
@@ -258,10 +258,10 @@ static inline bool ref_occludes(const struct accel *A, const struct group *g, ui
 	case REF_INST:
 		return accel_inst_occluded(A, &g->inst[i], r);
 	default: { /* an xprim: accel_xprim_test's answer without a candidate, but CSG */
-		const struct geom_obj *go = g->xp[i].g;
-		if (go->kind == PRIM_CSG)
+		const struct xprim *x = &g->xp[i];
+		if (x->r <= 0 && x->g->kind == PRIM_CSG) /* OPEN CYLINDERS read no geom_obj */
 			break;
-		return accel_xprim_occludes(go, r);
+		return accel_xprim_occludes(x, r);
 	}
 	}
 	struct cand c;

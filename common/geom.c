@@ -509,7 +509,7 @@ bool geom_intersect(const struct geom_obj *g, vec3 o, vec3 d, double tmin, doubl
 			if (!cyl_solid(g, o, d, &t0, &t1, &p0, &p1))
 				return false;
 		} else {
-			return geom_cyl_open_hit(g, o, d, tmin, tmax, t, part);
+			return geom_cyl_open_hit(g->u.cyl.from, g->u.cyl.a, g->u.cyl.r, g->u.cyl.h, o, d, tmin, tmax, t, part);
 		}
 		break;
 	default:

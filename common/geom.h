@@ -188,24 +188,26 @@ static inline bool geom_tube_misses(vec3 op, vec3 dp, double r2)
 }
 
 /*
- * geom_intersect of an open cylinder (g->kind PRIM_CYLINDER, not capped),
- * object-space ray: the side between the caps, seen from both sides. Inline
- * here so that the traversals' xprim tests (accel.c) reach it without
- * geom_intersect's call and switch; the same arithmetic either way.
+ * geom_intersect of an open cylinder (PRIM_CYLINDER, not capped: its
+ * u.cyl.from, a, r, h), object-space ray: the side between the caps, seen
+ * from both sides. Inline here so that the traversals' xprim tests
+ * (accel.c) reach it without geom_intersect's call and switch, from a
+ * record of their own (OPEN CYLINDERS, accel_int.h); the same arithmetic
+ * either way.
  */
-static inline __attribute__((always_inline)) bool geom_cyl_open_hit(const struct geom_obj *g, vec3 o, vec3 d,
-								     double tmin, double tmax, double *t,
-								     int *part)
+static inline __attribute__((always_inline)) bool geom_cyl_open_hit(vec3 from, vec3 a, double r, double h,
+								     vec3 o, vec3 d, double tmin, double tmax,
+								     double *t, int *part)
 {
 	/* one set of dot products, the caps by the axial coordinate */
-	vec3 a = g->u.cyl.a, oc = v3_sub(o, g->u.cyl.from);
+	vec3 oc = v3_sub(o, from);
 	double z0 = v3_dot(oc, a), dz = v3_dot(d, a);
 	vec3 op = v3_sub(oc, v3_scale(a, z0)), dp = v3_sub(d, v3_scale(a, dz));
-	double r2 = g->u.cyl.r * g->u.cyl.r, t0, t1;
+	double r2 = r * r, t0, t1;
 	if (geom_tube_misses(op, dp, r2) || v3_dot(dp, dp) <= 1e-30 * v3_dot(d, d) ||
 	    !geom_sphere_roots(op, dp, r2, &t0, &t1))
 		return false; /* parallel to the axis: only the (open) ends */
-	double za = z0 + t0 * dz, zb = z0 + t1 * dz, h = g->u.cyl.h;
+	double za = z0 + t0 * dz, zb = z0 + t1 * dz;
 	if (za >= 0 && za <= h && t0 > tmin && t0 < tmax) {
 		*t = t0, *part = GEOM_PART_MAIN;
 		return true;
