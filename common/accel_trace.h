@@ -158,18 +158,29 @@ void accel_finish(const struct accel *A, const struct group *g, const struct tra
 
 /* ---- primitive tests -------------------------------------------------------------- */
 
+/*
+ * AWAY: a ray that starts outside (or on) a sphere and moves away from its
+ * centre (c >= 0, tc < 0) has both roots at t <= 0, as they are computed
+ * here: q = tc - hh < 0 (the rounded difference is at most tc), and the
+ * other root c inv_dd / q <= 0 (or NaN, which fails every comparison). For
+ * tmin >= 0 that is a miss, found without the root and the division. It is
+ * the test of the sphere a secondary or shadow ray leaves (balls_s4: one
+ * per ray). The same for a cylinder's tube: geom_cyl_open_hit.
+ */
 static inline bool sphere_test(const struct gsphere *sp, const struct trace *r, double *t)
 {
 	vec3 oc = v3_sub(r->o, sp->c);
 	double b = v3_dot(oc, r->d);
 	double tc = -b * r->inv_dd;
+	double c = v3_dot(oc, oc) - sp->r2;
+	if (tc < 0 && c >= 0 && r->tmin >= 0) /* AWAY */
+		return false;
 	vec3 f = v3_add(oc, v3_scale(r->d, tc));
 	double h2 = (sp->r2 - v3_dot(f, f)) * r->inv_dd;
 	if (h2 < 0)
 		return false;
 	double hh = sqrt(h2);
 	double q = tc + (tc >= 0 ? hh : -hh);
-	double c = v3_dot(oc, oc) - sp->r2;
 	double other = q != 0 ? c * r->inv_dd / q : 0;
 	double t0 = q < other ? q : other, t1 = q < other ? other : q;
 	if (t0 > r->tmin && t0 < r->tmax) {

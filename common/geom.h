@@ -204,9 +204,17 @@ static inline __attribute__((always_inline)) bool geom_cyl_open_hit(vec3 from, v
 	double z0 = v3_dot(oc, a), dz = v3_dot(d, a);
 	vec3 op = v3_sub(oc, v3_scale(a, z0)), dp = v3_sub(d, v3_scale(a, dz));
 	double r2 = r * r, t0, t1;
-	if (geom_tube_misses(op, dp, r2) || v3_dot(dp, dp) <= 1e-30 * v3_dot(d, d) ||
-	    !geom_sphere_roots(op, dp, r2, &t0, &t1))
+	if (geom_tube_misses(op, dp, r2) || v3_dot(dp, dp) <= 1e-30 * v3_dot(d, d))
 		return false; /* parallel to the axis: only the (open) ends */
+	/* AWAY (sphere_test, accel_trace.h): outside the tube, moving away from
+	 * its axis, so both roots <= 0: c = O - r2 >= 0 and tc = -B / A < 0,
+	 * B / A >= 2^-900 (A >= 2^-100 keeps A 2^-900 exact) so that tc is not
+	 * -0, which would take the other branch of q */
+	double A = v3_dot(dp, dp), B = v3_dot(op, dp);
+	if (tmin >= 0 && v3_dot(op, op) - r2 >= 0 && A >= 0x1p-100 && B >= A * 0x1p-900)
+		return false;
+	if (!geom_sphere_roots(op, dp, r2, &t0, &t1))
+		return false;
 	double za = z0 + t0 * dz, zb = z0 + t1 * dz;
 	if (za >= 0 && za <= h && t0 > tmin && t0 < tmax) {
 		*t = t0, *part = GEOM_PART_MAIN;
