@@ -165,15 +165,17 @@ void accel_finish(const struct accel *A, const struct group *g, const struct tra
  * other root c inv_dd / q <= 0 (or NaN, which fails every comparison). For
  * tmin >= 0 that is a miss, found without the root and the division. It is
  * the test of the sphere a secondary or shadow ray leaves (balls_s4: one
- * per ray). The same for a cylinder's tube: geom_cyl_open_hit.
+ * per ray). The same for a cylinder's tube: geom_cyl_open_hit. Without
+ * away, the test as it was before (tests/unit/test_away.c compares them).
  */
-static inline bool sphere_test(const struct gsphere *sp, const struct trace *r, double *t)
+static inline __attribute__((always_inline)) bool sphere_test_with(const struct gsphere *sp, const struct trace *r,
+								    double *t, const bool away)
 {
 	vec3 oc = v3_sub(r->o, sp->c);
 	double b = v3_dot(oc, r->d);
 	double tc = -b * r->inv_dd;
 	double c = v3_dot(oc, oc) - sp->r2;
-	if (tc < 0 && c >= 0 && r->tmin >= 0) /* AWAY */
+	if (away && tc < 0 && c >= 0 && r->tmin >= 0) /* AWAY */
 		return false;
 	vec3 f = v3_add(oc, v3_scale(r->d, tc));
 	double h2 = (sp->r2 - v3_dot(f, f)) * r->inv_dd;
@@ -192,6 +194,11 @@ static inline bool sphere_test(const struct gsphere *sp, const struct trace *r, 
 		return true;
 	}
 	return false;
+}
+
+static inline bool sphere_test(const struct gsphere *sp, const struct trace *r, double *t)
+{
+	return sphere_test_with(sp, r, t, true);
 }
 
 /* Bounded reference k (in leaf order) of g. */

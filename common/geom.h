@@ -193,11 +193,12 @@ static inline bool geom_tube_misses(vec3 op, vec3 dp, double r2)
  * from both sides. Inline here so that the traversals' xprim tests
  * (accel.c) reach it without geom_intersect's call and switch, from a
  * record of their own (OPEN CYLINDERS, accel_int.h); the same arithmetic
- * either way.
+ * either way. geom_cyl_open_test without away is the test before AWAY
+ * (tests/unit/test_away.c compares them).
  */
-static inline __attribute__((always_inline)) bool geom_cyl_open_hit(vec3 from, vec3 a, double r, double h,
-								     vec3 o, vec3 d, double tmin, double tmax,
-								     double *t, int *part)
+static inline __attribute__((always_inline)) bool geom_cyl_open_test(vec3 from, vec3 a, double r, double h,
+								      vec3 o, vec3 d, double tmin, double tmax,
+								      double *t, int *part, const bool away)
 {
 	/* one set of dot products, the caps by the axial coordinate */
 	vec3 oc = v3_sub(o, from);
@@ -211,7 +212,7 @@ static inline __attribute__((always_inline)) bool geom_cyl_open_hit(vec3 from, v
 	 * B / A >= 2^-900 (A >= 2^-100 keeps A 2^-900 exact) so that tc is not
 	 * -0, which would take the other branch of q */
 	double A = v3_dot(dp, dp), B = v3_dot(op, dp);
-	if (tmin >= 0 && v3_dot(op, op) - r2 >= 0 && A >= 0x1p-100 && B >= A * 0x1p-900)
+	if (away && tmin >= 0 && v3_dot(op, op) - r2 >= 0 && A >= 0x1p-100 && B >= A * 0x1p-900)
 		return false;
 	if (!geom_sphere_roots(op, dp, r2, &t0, &t1))
 		return false;
@@ -225,6 +226,13 @@ static inline __attribute__((always_inline)) bool geom_cyl_open_hit(vec3 from, v
 		return true;
 	}
 	return false;
+}
+
+static inline __attribute__((always_inline)) bool geom_cyl_open_hit(vec3 from, vec3 a, double r, double h,
+								     vec3 o, vec3 d, double tmin, double tmax,
+								     double *t, int *part)
+{
+	return geom_cyl_open_test(from, a, r, h, o, d, tmin, tmax, t, part, true);
 }
 
 /* ---- watertight ray/triangle (Woop, Benthin, Wald 2013) ---------------- */

@@ -2,7 +2,8 @@
  * test_away.c - AWAY, the early miss of a ray that leaves a sphere or an
  * open cylinder's tube (sphere_test in common/accel_trace.h,
  * geom_cyl_open_hit in common/geom.h), changes no answer. Each is compared
- * with the same test written out here without it, on rays from points on
+ * with the same test without it (sphere_test_with and geom_cyl_open_test,
+ * away false), on rays from points on
  * the surface, just outside and just inside it (by 1e-9 of the radius and
  * the coordinates, as shading offsets a ray's start, and by more), in every
  * direction, with tmin 0, tiny or negative and tmax infinite or finite, at
@@ -18,54 +19,6 @@
 #include "tests/unit/check.h"
 
 #define N_RAYS 400000
-
-/* sphere_test as it was before AWAY, operation for operation. */
-static bool sphere_plain(const struct gsphere *sp, const struct trace *r, double *t)
-{
-	vec3 oc = v3_sub(r->o, sp->c);
-	double b = v3_dot(oc, r->d);
-	double tc = -b * r->inv_dd;
-	vec3 f = v3_add(oc, v3_scale(r->d, tc));
-	double h2 = (sp->r2 - v3_dot(f, f)) * r->inv_dd;
-	if (h2 < 0)
-		return false;
-	double hh = sqrt(h2);
-	double q = tc + (tc >= 0 ? hh : -hh);
-	double c = v3_dot(oc, oc) - sp->r2;
-	double other = q != 0 ? c * r->inv_dd / q : 0;
-	double t0 = q < other ? q : other, t1 = q < other ? other : q;
-	if (t0 > r->tmin && t0 < r->tmax) {
-		*t = t0;
-		return true;
-	}
-	if (t1 > r->tmin && t1 < r->tmax) {
-		*t = t1;
-		return true;
-	}
-	return false;
-}
-
-/* geom_cyl_open_hit as it was before AWAY. */
-static bool cyl_plain(vec3 from, vec3 a, double rad, double h, vec3 o, vec3 d, double tmin, double tmax, double *t)
-{
-	vec3 oc = v3_sub(o, from);
-	double z0 = v3_dot(oc, a), dz = v3_dot(d, a);
-	vec3 op = v3_sub(oc, v3_scale(a, z0)), dp = v3_sub(d, v3_scale(a, dz));
-	double r2 = rad * rad, t0, t1;
-	if (geom_tube_misses(op, dp, r2) || v3_dot(dp, dp) <= 1e-30 * v3_dot(d, d) ||
-	    !geom_sphere_roots(op, dp, r2, &t0, &t1))
-		return false;
-	double za = z0 + t0 * dz, zb = z0 + t1 * dz;
-	if (za >= 0 && za <= h && t0 > tmin && t0 < tmax) {
-		*t = t0;
-		return true;
-	}
-	if (zb >= 0 && zb <= h && t1 > tmin && t1 < tmax) {
-		*t = t1;
-		return true;
-	}
-	return false;
-}
 
 static uint64_t state = 0x243f6a8885a308d3ull;
 static double uniform(void) { return (double)(rng_mix(state++) >> 11) * 0x1p-53; }
@@ -117,7 +70,7 @@ int main(void)
 		struct gsphere sp = { c, rad * rad, 0, 0 };
 		struct trace r;
 		trace_init(&r, v3_add(c, v3_scale(n, rad * (1 + start_e(c)))), d, tmin, tmax);
-		bool ha = sphere_test(&sp, &r, &ta), hb = sphere_plain(&sp, &r, &tb);
+		bool ha = sphere_test(&sp, &r, &ta), hb = sphere_test_with(&sp, &r, &tb, false);
 		bad_s += ha != hb || (ha && memcmp(&ta, &tb, sizeof ta) != 0);
 		hits_s += hb;
 		vec3 oc = v3_sub(r.o, c);
@@ -129,7 +82,7 @@ int main(void)
 		vec3 side = v3_norm(v3_sub(n, v3_scale(a, v3_dot(n, a))));
 		vec3 o = v3_add(v3_add(c, v3_scale(a, z)), v3_scale(side, rad * (1 + start_e(c))));
 		ha = geom_cyl_open_hit(c, a, rad, h, o, d, tmin, tmax, &ta, &(int){ 0 });
-		hb = cyl_plain(c, a, rad, h, o, d, tmin, tmax, &tb);
+		hb = geom_cyl_open_test(c, a, rad, h, o, d, tmin, tmax, &tb, &(int){ 0 }, false);
 		bad_c += ha != hb || (ha && memcmp(&ta, &tb, sizeof ta) != 0);
 		hits_c += hb;
 		vec3 op = v3_sub(v3_sub(o, c), v3_scale(a, v3_dot(v3_sub(o, c), a)));
