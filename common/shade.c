@@ -659,6 +659,24 @@ static int highlight_needed(double rv, double power, double kd, vec3 in, vec3 kc
 }
 
 /*
+ * POW AFTER SHADOW: whether a sample's term passes direct()'s cut whatever
+ * its highlight hl >= 0 is, so that its shadow ray is traced either way and
+ * xm_pow can wait for the answer (a blocked ray needs no highlight: balls_s4's
+ * single shadow rays are about half blocked). With every factor >= 0 each
+ * rounded channel of in (kcd ndotl + kcs hl) is at least its value at hl =
+ * 0, which is computed here as direct() computes the term; a NaN or a
+ * negative factor answers false (xm_pow first, as before).
+ */
+static bool passes_without(vec3 in, vec3 kcd, vec3 kcs, double ndotl, double weight, double lim)
+{
+	if (!(in.x >= 0 && in.y >= 0 && in.z >= 0 && kcd.x >= 0 && kcd.y >= 0 && kcd.z >= 0 && kcs.x >= 0 &&
+	      kcs.y >= 0 && kcs.z >= 0 && ndotl >= 0 && weight >= 0))
+		return false;
+	vec3 lo = v3_mul(in, v3_add(v3_scale(kcd, ndotl), v3_scale(kcs, 0.0)));
+	return maxabs(lo) * weight >= lim;
+}
+
+/*
  * Direct lighting at p (shading normal n facing the viewer, geometric
  * normal ng on the same side, unit direction to the viewer v) for material
  * m whose diffuse weight is kd (diffuse-reflection x (1 - transparency)):
@@ -711,25 +729,32 @@ static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx 
 			vec3 in = l->colour;
 			if (l->fall_off != 0)
 				in = v3_scale(in, 1 / xm_pow(dist, l->fall_off));
-			double hl = 0; /* (R.V)^power */
+			double hl = 0, rv = 0; /* (R.V)^power */
+			bool traced = shadows && !l->no_shadows && !known, later = false;
 			if (want_spec) {
-				double rv = v3_dot(v3_sub(v3_scale(n, 2 * ndotl), ldir), v);
+				rv = v3_dot(v3_sub(v3_scale(n, 2 * ndotl), ldir), v);
 				if (rv > 0) {
 					int need = highlight_needed(rv, m->spec_power, kd, in, kcd, kcs, ndotl, weight,
 								    cut * n_samples);
 					if (need < 0)
 						continue;
-					if (need)
+					if (need && traced && passes_without(in, kcd, kcs, ndotl, weight, cut * n_samples))
+						later = true; /* POW AFTER SHADOW */
+					else if (need)
 						hl = xm_pow(rv, m->spec_power);
 				}
 			}
 			vec3 term = v3_mul(in, v3_add(v3_scale(kcd, ndotl), v3_scale(kcs, hl)));
-			if (maxabs(term) * weight < cut * n_samples)
+			if (!later && maxabs(term) * weight < cut * n_samples)
 				continue;
-			if (shadows && !l->no_shadows && !known) {
+			if (traced) {
 				vec3 t = transmittance(c, offset(p, ng, ldir), lp, i, pre, obj);
 				if (maxc(t) <= 0)
 					continue;
+				if (later) {
+					hl = xm_pow(rv, m->spec_power);
+					term = v3_mul(in, v3_add(v3_scale(kcd, ndotl), v3_scale(kcs, hl)));
+				}
 				term = v3_mul(term, t);
 			}
 			sum = v3_add(sum, term);
