@@ -339,24 +339,26 @@ bool accel_inst_occluded(const struct accel *A, const struct ginst *in, const st
 /* A simple primitive other than an untransformed sphere or a triangle (an
  * xprim that is not CSG): a small frame of its own, apart from the CSG and
  * instance paths. Same contract as ref_test. */
+static inline __attribute__((always_inline)) bool xprim_hit(const struct xprim *x, const struct trace *r, double *t,
+							     int *part)
+{
+	if (x->r > 0) /* OPEN CYLINDERS */
+		return geom_cyl_open_hit(x->from, x->a, x->r, x->h, r->o, r->d, r->tmin, r->tmax, t, part);
+	const struct geom_obj *go = x->g;
+	vec3 o = r->o, d = r->d;
+	if (go->has_xform) {
+		o = m34_point(&go->inv, o);
+		d = m34_dir(&go->inv, d);
+	}
+	return geom_intersect(go, o, d, r->tmin, r->tmax, t, part);
+}
+
 __attribute__((noinline)) bool accel_xprim_test(const struct xprim *x, uint32_t ref, struct trace *r,
 						struct cand *c)
 {
 	double t;
 	int part;
-	bool hit;
-	if (x->r > 0) { /* OPEN CYLINDERS */
-		hit = geom_cyl_open_hit(x->from, x->a, x->r, x->h, r->o, r->d, r->tmin, r->tmax, &t, &part);
-	} else {
-		const struct geom_obj *go = x->g;
-		vec3 o = r->o, d = r->d;
-		if (go->has_xform) {
-			o = m34_point(&go->inv, o);
-			d = m34_dir(&go->inv, d);
-		}
-		hit = geom_intersect(go, o, d, r->tmin, r->tmax, &t, &part);
-	}
-	if (!hit || !cand_better(c, ref, t))
+	if (!xprim_hit(x, r, &t, &part) || !cand_better(c, ref, t))
 		return false;
 	c->part = part;
 	cand_take(c, r, ref, t);
@@ -369,15 +371,7 @@ __attribute__((noinline)) bool accel_xprim_occludes(const struct xprim *x, const
 {
 	double t;
 	int part;
-	if (x->r > 0) /* OPEN CYLINDERS */
-		return geom_cyl_open_hit(x->from, x->a, x->r, x->h, r->o, r->d, r->tmin, r->tmax, &t, &part);
-	const struct geom_obj *go = x->g;
-	vec3 o = r->o, d = r->d;
-	if (go->has_xform) {
-		o = m34_point(&go->inv, o);
-		d = m34_dir(&go->inv, d);
-	}
-	return geom_intersect(go, o, d, r->tmin, r->tmax, &t, &part);
+	return xprim_hit(x, r, &t, &part);
 }
 
 __attribute__((noinline)) bool accel_ref_test_slow(const struct accel *A, const struct group *g, uint32_t ref,

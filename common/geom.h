@@ -176,9 +176,8 @@ static inline __attribute__((always_inline)) bool geom_sphere_roots(vec3 oc, vec
  * product and sum here and there errs by at most about 25 u (O + r2) A
  * in M (u = 2^-53; |f| <= |op| bounds the cancellation in f), so a margin
  * of 1e-9 (O + r2) A leaves the answer the same bit for bit whatever the
- * rounding; below 2^-900 or at infinity it answers false. Most rays that
- * reach a cylinder's box pass its tube at a distance (31% of rings_s3's
- * tests), so this is a cylinder test's usual end (docs/performance.md).
+ * rounding; below 2^-900 or at infinity it answers false. It ends 31% of
+ * rings_s3's cylinder tests (docs/performance.md, round 12).
  */
 static inline bool geom_tube_misses(vec3 op, vec3 dp, double r2)
 {

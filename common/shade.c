@@ -658,13 +658,19 @@ static int highlight_needed(double rv, double power, double kd, vec3 in, vec3 kc
 	return amax < INFINITY && amin >= 0x1p-960 && b <= amin * 0x1p-56 ? 0 : 1;
 }
 
+/* A light sample's term of the lighting equation: in (kcd ndotl + kcs hl). */
+static inline vec3 phong_term(vec3 in, vec3 kcd, vec3 kcs, double ndotl, double hl)
+{
+	return v3_mul(in, v3_add(v3_scale(kcd, ndotl), v3_scale(kcs, hl)));
+}
+
 /*
  * POW AFTER SHADOW: whether a sample's term passes direct()'s cut whatever
  * its highlight hl >= 0 is, so that its shadow ray is traced either way and
  * xm_pow can wait for the answer (a blocked ray needs no highlight: balls_s4's
  * single shadow rays are about half blocked). With every factor >= 0 each
- * rounded channel of in (kcd ndotl + kcs hl) is at least its value at hl =
- * 0, which is computed here as direct() computes the term; a NaN or a
+ * rounded channel of phong_term is at least its value at hl = 0, computed
+ * here with the same function; a NaN or a
  * negative factor answers false (xm_pow first, as before).
  */
 static bool passes_without(vec3 in, vec3 kcd, vec3 kcs, double ndotl, double weight, double lim)
@@ -672,8 +678,7 @@ static bool passes_without(vec3 in, vec3 kcd, vec3 kcs, double ndotl, double wei
 	if (!(in.x >= 0 && in.y >= 0 && in.z >= 0 && kcd.x >= 0 && kcd.y >= 0 && kcd.z >= 0 && kcs.x >= 0 &&
 	      kcs.y >= 0 && kcs.z >= 0 && ndotl >= 0 && weight >= 0))
 		return false;
-	vec3 lo = v3_mul(in, v3_add(v3_scale(kcd, ndotl), v3_scale(kcs, 0.0)));
-	return maxabs(lo) * weight >= lim;
+	return maxabs(phong_term(in, kcd, kcs, ndotl, 0.0)) * weight >= lim;
 }
 
 /*
@@ -744,7 +749,7 @@ static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx 
 						hl = xm_pow(rv, m->spec_power);
 				}
 			}
-			vec3 term = v3_mul(in, v3_add(v3_scale(kcd, ndotl), v3_scale(kcs, hl)));
+			vec3 term = phong_term(in, kcd, kcs, ndotl, hl);
 			if (!later && maxabs(term) * weight < cut * n_samples)
 				continue;
 			if (traced) {
@@ -752,8 +757,7 @@ static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx 
 				if (maxc(t) <= 0)
 					continue;
 				if (later) {
-					hl = xm_pow(rv, m->spec_power);
-					term = v3_mul(in, v3_add(v3_scale(kcd, ndotl), v3_scale(kcs, hl)));
+					term = phong_term(in, kcd, kcs, ndotl, xm_pow(rv, m->spec_power));
 				}
 				term = v3_mul(term, t);
 			}
@@ -795,7 +799,6 @@ struct surf {
 	double td;           /* transparency clamped to [0, 1] */
 	uint32_t obj;        /* the object hit (LAST-BLOCKER HINTS' key) */
 };
-
 
 /* The first half of trace_hit: false when the hit cannot be shaded (black).
  * The hit is read in place, field by field, and copied only when a shader
