@@ -909,6 +909,68 @@ bool accel_occluded_hint(const struct accel *a, const struct ray *r, uint32_t *h
 	return false;
 }
 
+/* The LIGHT BUFFER query (accel_int.h, accel_light.c): after the hint and
+ * the unbounded references, the entries of the cell of u = o - lp = -d up
+ * to the ray's depth |u_a|; the tree when the ray is not one toward the
+ * light (d = lp - o, t within [0, 1]) or starts beyond the buffer's R. */
+bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ray *r, uint32_t *hint)
+{
+	const struct lbuf *lb = a->lbuf && light < a->s->n_lights ? a->lbuf[light] : NULL;
+	if (!lb)
+		return accel_occluded_hint(a, r, hint);
+	if (!a->root || !ray_ok(r))
+		return false;
+	struct trace t;
+	trace_init(&t, r->o, r->d, ray_tmin(r), r->tmax);
+	const struct group *g = a->root;
+	if (hint_occludes(a, g, *hint, &t))
+		return true;
+	vec3 d = v3_sub(lb->lp, r->o);
+	double ux = -r->d.x, uy = -r->d.y, uz = -r->d.z;
+	double ax = fabs(ux), ay = fabs(uy), az = fabs(uz);
+	double depth = fmax(ax, fmax(ay, az));
+	if (!(t.tmax <= 1) || d.x != r->d.x || d.y != r->d.y || d.z != r->d.z || !(depth <= lb->R)) {
+		if (group_occluded_who(a, g, &t, hint))
+			return true;
+		*hint = ACCEL_NO_HINT;
+		return false;
+	}
+	for (uint32_t k = 0; k < g->n_unb; k++) {
+		if (cancel_poll_every(k)) /* CANCELLATION, as accel_unb_hit */
+			return false;
+		if (unb_occludes(a, g, k, &t)) {
+			*hint = g->unb[k];
+			return true;
+		}
+	}
+	for (uint32_t k = 0; k < lb->n_near; k++)
+		if (ref_occludes(a, g, lb->near[k], &t)) {
+			*hint = lb->near[k];
+			return true;
+		}
+	uint32_t face;
+	double p, q;
+	if (ax >= ay && ax >= az)
+		face = ux < 0, p = uy / ax, q = uz / ax;
+	else if (ay >= az)
+		face = 2 + (uy < 0), p = ux / ay, q = uz / ay;
+	else
+		face = 4 + (uz < 0), p = ux / az, q = uy / az;
+	uint32_t cell = (face * lb->n + lbuf_cell(lb, q)) * lb->n + lbuf_cell(lb, p);
+	const struct lbuf_ent *e = lb->ent + lb->start[cell], *end = lb->ent + lb->start[cell + 1];
+	double lim = depth * (1 + 1e-9);
+	for (uint32_t k = 0; e < end && e->dmin <= lim; e++, k++) {
+		if (cancel_poll_every(k)) /* CANCELLATION, as a leaf's references */
+			return false;
+		if (ref_occludes(a, g, e->ref, &t)) {
+			*hint = e->ref;
+			return true;
+		}
+	}
+	*hint = ACCEL_NO_HINT;
+	return false;
+}
+
 void accel_get_stats(const struct accel *a, struct accel_stats *st) { *st = a->st; }
 
 bool accel_bounds(const struct accel *a, vec3 *lo, vec3 *hi)

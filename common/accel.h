@@ -127,6 +127,14 @@ bool accel_occluded(const struct accel *a, const struct ray *r);
  */
 bool accel_occluded_hint(const struct accel *a, const struct ray *r, uint32_t *hint);
 /*
+ * accel_occluded_hint for a shadow ray toward the scene's point light
+ * number light: r->d = (the light's position) - r->o, tmin >= 0, tmax <= 1
+ * (the light). The same answer; faster where the accel made a light
+ * buffer for that light (LIGHT BUFFERS, accel_int.h). Any other ray gets
+ * accel_occluded_hint's answer. Thread-safe.
+ */
+bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ray *r, uint32_t *hint);
+/*
  * accel_occluded_hint for four rays at once (occ[i] is what
  * accel_occluded(a, &r[i]) gives), sharing one hint: faster when the rays
  * are neighbours, as the shadow rays of a 2x2 block of pixels toward one

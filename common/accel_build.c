@@ -60,6 +60,7 @@ void accel_free(struct accel *a)
 		free(a->dgroup);
 	}
 	group_free(a->root);
+	accel_light_free(a);
 	free(a->lin_inv);
 	free(a);
 }
@@ -868,6 +869,8 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 				goto cancelled;
 			g->refs[k] = all[perm[k]];
 		}
+		if (boxes && objs == A->s->roots && accel_light_build(A, g, boxes, perm) < 0) /* LIGHT BUFFERS */
+			goto oom;
 		int mrc = make_blocks(g);
 		if (mrc == ACCEL_CANCELLED)
 			goto cancelled;

@@ -157,8 +157,49 @@ struct group {
 	size_t bytes;
 };
 
+/*
+ * LIGHT BUFFERS (accel_light.c; Haines and Greenberg's light buffer, 1986).
+ * For a point light that casts shadows, the root group's bounded
+ * references sorted into the cells of a direction cube around the light:
+ * 6 faces of n x n cells, face 2a (+a) or 2a + 1 (-a) for the axis a, cell
+ * (i, j) of the face the directions whose projections p = u_b / |u_a|, q =
+ * u_c / |u_a| (b < c the other axes) fall in [i, i + 1) x [j, j + 1) x 2/n
+ * - 1. A shadow ray from o toward the light (d = lp - o, t in [0, 1]) lies
+ * along u = o - lp, so only the references of u's cell can block it
+ * (accel_occluded_light); each cell's entries are sorted by dmin, the
+ * nearest depth |X_a - lp_a| any point X of the reference's box has on the
+ * face, and a ray of depth |u_a| stops at the first entry beyond it. Why
+ * the cells never miss a reference the ray can hit: accel_light.c.
+ */
+struct lbuf_ent {
+	float dmin;
+	uint32_t ref;
+};
+struct lbuf {
+	vec3 lp;         /* the light's position */
+	double R;        /* answers for origins with |o - lp|_inf <= R */
+	uint32_t n;      /* cells per face side */
+	double half_n;   /* n / 2 */
+	uint32_t *start; /* cell k's entries: ent[start[k] .. start[k + 1]) */
+	struct lbuf_ent *ent;
+	uint32_t *near; /* references whose boxes come within 3D of the light,
+			   tested by every query (accel_light.c) */
+	uint32_t n_near;
+};
+
+/* The cell column or row of a projection p (both in the build and the
+ * queries: the same monotonic rounding). */
+static inline uint32_t lbuf_cell(const struct lbuf *lb, double p)
+{
+	double x = (p + 1) * lb->half_n;
+	if (!(x > 0))
+		return 0;
+	return x >= (double)lb->n ? lb->n - 1 : (uint32_t)x;
+}
+
 struct accel {
 	const struct scene *s;
+	struct lbuf **lbuf; /* per scene light: its LIGHT BUFFER, or NULL (owned) */
 	struct geom_obj **gobj;   /* per object, built on demand; NULL until needed (owned) */
 	struct group **dgroup;    /* per define, built on first use (owned) */
 	struct group *root;
@@ -243,6 +284,11 @@ static inline vec3 tri_normal(const struct gmesh *m, const uint32_t *ix)
  * (tests/unit/test_bvh.c checks).
  */
 #define BOX_PAD_REL 0x1p-19
+
+/* Makes A->lbuf for the root group g from its references' boxes (boxes[perm[k]]
+ * is reference k's, relative to g->center and padded); 0, or -1 out of memory. */
+int accel_light_build(struct accel *A, const struct group *g, const struct geom_box *boxes, const uint32_t *perm);
+void accel_light_free(struct accel *A);
 #define BOX_WIDEN 0x1p-20
 
 #endif

@@ -590,7 +590,7 @@ static bool twalk_cross(const struct shade_ctx *c, struct twalk *w, struct hit *
  * light i's hint for object obj. */
 static vec3 twalk_end(const struct shade_ctx *c, const struct twalk *w, uint32_t i, uint32_t obj)
 {
-	return accel_occluded_hint(c->a, &w->r, light_hint(c, i, obj)) ? v3(0, 0, 0) : w->t;
+	return accel_occluded_light(c->a, i, &w->r, light_hint(c, i, obj)) ? v3(0, 0, 0) : w->t;
 }
 
 /* One step of walk w alone; twalk_cross's result. */

@@ -111,6 +111,13 @@ bool accel_occluded_hint(const struct accel *a, const struct ray *r, uint32_t *h
 	return accel_occluded(a, r);
 }
 
+/* So does the light's buffer (accel.h): the same answer. */
+bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ray *r, uint32_t *hint)
+{
+	(void)light;
+	return accel_occluded_hint(a, r, hint);
+}
+
 void accel_occluded4(const struct accel *a, const struct ray r[4], bool occ[4], uint32_t *hint)
 {
 	for (int i = 0; i < 4; i++)

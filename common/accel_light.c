@@ -1,0 +1,323 @@
+/*
+ * accel_light.c - LIGHT BUFFERS (accel_int.h): the root group's references
+ * sorted into a direction cube around each point light, so that a shadow
+ * ray toward the light tests only what lies in its direction.
+ *
+ * WHY NO CELL MISSES A BLOCKER. The queries answer exactly what the tree
+ * answers: "anything hit" is a boolean over the references, each tested by
+ * the same function on the same ray, so the buffer must only never leave
+ * out a reference the ray can hit. The tree relies on this: a reference's
+ * test reports a hit only where the exact ray meets its padded box (the
+ * box tests are conservative, accel_int.h). So it is enough that every
+ * point X of the exact ray inside a reference's box projects into a cell
+ * that lists the reference.
+ *
+ * The ray is o + t d, d = fl(lp - o), t in [tmin, tmax] within [0, 1].
+ * Componentwise d = (lp - o)(1 + e), |e| <= u = 2^-53, so X - lp =
+ * U ((1 - t) - t e) with U = o - lp = -d exactly: X lies along U but for a
+ * relative error 2u / (1 - t), large only near the light. Let R bound
+ * |U|_inf (the farthest box corner from the light; origins beyond it go to
+ * the tree) and D = 1e-6 R.
+ *   - A box within 3D of the light (|X - lp|_inf, computed) is NEAR: every
+ *     query tests it (lbuf.near), in no cell.
+ *   - Any other box holds only points X with |X - lp|_inf > 2D (3D less the
+ *     rounding of the corners, about 1e-16 R). Such an X has 1 - t > 2D /
+ *     |U_a| - u >= 1.9e-6 (a is U's largest axis, the face the query
+ *     reads), so X's projection is U's within 2u / 1.9e-6 < 1.2e-10
+ *     relative, and its depth on the face is above D. The box clipped to
+ *     depths >= D has corners of positive depth, so its projection is the
+ *     rectangle of its eight corners' (a central projection maps the
+ *     convex box to the convex hull of its corners' images), computed with
+ *     relative errors near 1e-16 (corners as (center - lp) + box: errors of
+ *     1e-16 R against depths >= D, 1e-10 relative); padded by 1e-8, it
+ *     holds X's projection with room to spare, and the cells are found by
+ *     the same monotonic rounding (lbuf_cell) the query uses.
+ *   - A box whose cells would be more than a 16th of all (LBUF_WIDE: the
+ *     light is close to it) is WIDE: it joins the NEAR list instead.
+ *   - X's depth is at most |U_a| (1 + u), so entries whose dmin (rounded
+ *     down to float) exceeds |U_a| (1 + 1e-9) cannot hold a hit: the
+ *     query stops there (entries sorted by dmin).
+ * tests/unit/test_lbuf.c compares the answers with the tree's on rays
+ * toward the light from everywhere, and near it.
+ */
+#include "common/accel_int.h"
+#include "common/cancel.h"
+#include "common/scene.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* Cells per face side. A light gets no buffer (the tree answers) when its
+ * entries would exceed LBUF_REF_ENTRIES a reference plus LBUF_CELL_ENTRIES
+ * a cell, or what is left of LBUF_ALL_ENTRIES for all lights (32 MB);
+ * at most LBUF_MAX_LIGHTS lights get one (1.5 MB of cells each). Groups
+ * of fewer than LBUF_MIN_REFS references keep the tree alone (a few
+ * nodes deep), and so do those of more than LBUF_MAX_REFS. */
+#define LBUF_N 128
+#define LBUF_REF_ENTRIES 24
+#define LBUF_WIDE 16
+#define LBUF_CELL_ENTRIES 2
+#define LBUF_ALL_ENTRIES (1u << 22)
+#define LBUF_MAX_LIGHTS 16
+#define LBUF_MIN_REFS 64
+#define LBUF_MAX_REFS (1u << 20)
+#define LBUF_NEAR 1e-6
+#define LBUF_PAD 1e-8
+
+static double comp(vec3 v, int k) { return k == 0 ? v.x : k == 1 ? v.y : v.z; }
+
+/* A reference's cells on one face: columns i0..i1, rows j0..j1. */
+struct lrect {
+	uint32_t ref;
+	uint16_t face, i0, i1, j0, j1;
+	float dmin;
+};
+
+static float f_down(double x)
+{
+	float f = (float)x;
+	return (double)f > x ? nextafterf(f, -INFINITY) : f;
+}
+
+/* The rectangle of box [lo, hi] (relative to the light) on face f, into
+ * *r; false when the box has no point of depth >= D on it. */
+static bool face_rect(const struct lbuf *lb, vec3 lo, vec3 hi, int f, double D, struct lrect *r)
+{
+	int a = f >> 1, b = a == 0 ? 1 : 0, c = a == 2 ? 1 : 2;
+	double s = (f & 1) ? -1 : 1;
+	double d0 = s > 0 ? comp(lo, a) : -comp(hi, a), d1 = s > 0 ? comp(hi, a) : -comp(lo, a);
+	r->face = (uint16_t)f;
+	if (!(d1 >= D))
+		return false;
+	if (d0 < D)
+		d0 = D;
+	if (comp(lo, b) > 2 * d1 || comp(hi, b) < -2 * d1 || comp(lo, c) > 2 * d1 || comp(hi, c) < -2 * d1)
+		return false; /* beside the face (|p| or |q| >= 2 everywhere), known without dividing */
+	double pb[2] = { comp(lo, b), comp(hi, b) }, pc[2] = { comp(lo, c), comp(hi, c) }, dd[2] = { d0, d1 };
+	double pmin = INFINITY, pmax = -INFINITY, qmin = INFINITY, qmax = -INFINITY;
+	for (int k = 0; k < 2; k++)
+		for (int m = 0; m < 2; m++) {
+			double p = pb[k] / dd[m], q = pc[k] / dd[m];
+			pmin = fmin(pmin, p), pmax = fmax(pmax, p);
+			qmin = fmin(qmin, q), qmax = fmax(qmax, q);
+		}
+	pmin -= LBUF_PAD, qmin -= LBUF_PAD;
+	pmax += LBUF_PAD, qmax += LBUF_PAD;
+	if (pmax < -1 || pmin > 1 || qmax < -1 || qmin > 1) /* beside the face */
+		return false;
+	r->i0 = (uint16_t)lbuf_cell(lb, pmin), r->i1 = (uint16_t)lbuf_cell(lb, pmax);
+	r->j0 = (uint16_t)lbuf_cell(lb, qmin), r->j1 = (uint16_t)lbuf_cell(lb, qmax);
+	r->dmin = f_down(d0);
+	return true;
+}
+
+/* Rectangles nearest first (then by reference: the same order every build). */
+static int rect_order(const void *x, const void *y)
+{
+	const struct lrect *a = x, *b = y;
+	if (a->dmin != b->dmin)
+		return a->dmin < b->dmin ? -1 : 1;
+	return (a->ref > b->ref) - (a->ref < b->ref);
+}
+
+/* A reference's slot in the stamp array: kinds one after another. */
+static uint32_t stamp_slot(const struct group *g, uint32_t ref)
+{
+	uint32_t i = REF_IDX(ref);
+	switch (REF_KIND(ref)) {
+	case REF_SPHERE: return i;
+	case REF_TRI: return g->n_sph + i;
+	case REF_XPRIM: return g->n_sph + g->n_tri + i;
+	default: return g->n_sph + g->n_tri + g->n_xp + i;
+	}
+}
+
+static void lbuf_free(struct lbuf *lb)
+{
+	if (!lb)
+		return;
+	free(lb->start);
+	free(lb->ent);
+	free(lb->near);
+	free(lb);
+}
+
+/* Light lp's buffer over g's n references; NULL when over budget (the
+ * tree answers) or out of memory (*oom set). */
+static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *boxes, const uint32_t *perm, vec3 lp,
+			       uint64_t left, bool *oom)
+{
+	uint32_t n = g->n_refs;
+	struct lbuf *lb = calloc(1, sizeof *lb);
+	struct lrect *rects = malloc((size_t)n * 6 * sizeof *rects);
+	uint32_t *cnt = NULL, *stamp = NULL;
+	if (!lb || !rects)
+		goto oom;
+	lb->near = malloc((size_t)n * sizeof *lb->near);
+	if (!lb->near)
+		goto oom;
+	lb->lp = lp;
+	lb->n = LBUF_N;
+	lb->half_n = 0.5 * LBUF_N;
+	vec3 e = v3_sub(g->center, lp);
+	double R = 0;
+	for (uint32_t k = 0; k < n; k++) {
+		const struct geom_box *bx = &boxes[perm[k]];
+		vec3 lo = v3_add(e, bx->lo), hi = v3_add(e, bx->hi);
+		for (int a = 0; a < 3; a++)
+			R = fmax(R, fmax(fabs(comp(lo, a)), fabs(comp(hi, a))));
+	}
+	lb->R = R;
+	double D = LBUF_NEAR * R;
+	uint32_t n_rects = 0;
+	uint64_t total = 0;
+	const uint64_t cells = 6 * (uint64_t)LBUF_N * LBUF_N;
+	uint64_t budget = (uint64_t)n * LBUF_REF_ENTRIES + cells * LBUF_CELL_ENTRIES;
+	if (budget > left)
+		budget = left;
+	for (uint32_t k = 0; k < n; k++) {
+		if (cancel_poll_every(k))
+			goto over;
+		const struct geom_box *bx = &boxes[perm[k]];
+		vec3 lo = v3_add(e, bx->lo), hi = v3_add(e, bx->hi);
+		double dist = 0; /* |X - lp|_inf over the box */
+		for (int a = 0; a < 3; a++) {
+			double l = comp(lo, a), h = comp(hi, a);
+			dist = fmax(dist, l > 0 ? l : h < 0 ? -h : 0);
+		}
+		if (dist <= 3 * D) { /* NEAR: every query tests it */
+			lb->near[lb->n_near++] = g->refs[k];
+			continue;
+		}
+		uint32_t n0 = n_rects;
+		uint64_t area = 0;
+		for (int f = 0; f < 6; f++) {
+			struct lrect *r = &rects[n_rects];
+			if (!face_rect(lb, lo, hi, f, D, r))
+				continue;
+			r->ref = g->refs[k];
+			area += (uint64_t)(r->i1 - r->i0 + 1) * (uint64_t)(r->j1 - r->j0 + 1);
+			n_rects++;
+		}
+		if (area > cells / LBUF_WIDE) { /* WIDE: tested by every query too */
+			n_rects = n0;
+			lb->near[lb->n_near++] = g->refs[k];
+			continue;
+		}
+		total += area;
+		if (total > budget)
+			goto over;
+	}
+	qsort(rects, n_rects, sizeof *rects, rect_order);
+	stamp = calloc((size_t)g->n_sph + g->n_tri + g->n_xp + g->n_inst + 1, sizeof *stamp);
+	cnt = calloc(cells + 1, sizeof *cnt);
+	lb->ent = malloc((total ? total : 1) * sizeof *lb->ent);
+	if (!stamp || !cnt || !lb->ent)
+		goto oom;
+	uint32_t nn = 0; /* NEAR: one entry per reference */
+	for (uint32_t k = 0; k < lb->n_near; k++) {
+		uint32_t *st = &stamp[stamp_slot(g, lb->near[k])];
+		if (!*st) {
+			*st = 1;
+			lb->near[nn++] = lb->near[k];
+		}
+	}
+	for (uint32_t k = 0; k < nn; k++)
+		stamp[stamp_slot(g, lb->near[k])] = 0;
+	lb->n_near = nn;
+	for (uint32_t k = 0; k < n_rects; k++) {
+		const struct lrect *r = &rects[k];
+		for (uint32_t j = r->j0; j <= r->j1; j++)
+			for (uint32_t i = r->i0; i <= r->i1; i++)
+				cnt[((uint64_t)r->face * LBUF_N + j) * LBUF_N + i]++;
+	}
+	/* cnt becomes the cells' starts, then their fill positions */
+	uint32_t at = 0;
+	for (uint64_t k = 0; k < cells; k++) {
+		uint32_t c = cnt[k];
+		cnt[k] = at;
+		at += c;
+	}
+	cnt[cells] = at;
+	lb->start = malloc((cells + 1) * sizeof *lb->start);
+	if (!lb->start)
+		goto oom;
+	for (uint64_t k = 0; k <= cells; k++)
+		lb->start[k] = cnt[k];
+	for (uint32_t k = 0; k < n_rects; k++) {
+		const struct lrect *r = &rects[k];
+		for (uint32_t j = r->j0; j <= r->j1; j++)
+			for (uint32_t i = r->i0; i <= r->i1; i++) {
+				uint32_t *pos = &cnt[((uint64_t)r->face * LBUF_N + j) * LBUF_N + i];
+				lb->ent[(*pos)++] = (struct lbuf_ent){ r->dmin, r->ref };
+			}
+	}
+	/* each cell nearest first (the rectangles were), one entry per
+	 * reference (a sliced cylinder or a split triangle has several boxes):
+	 * the first, nearest; stamp[slot] = 1 + the last cell that has it */
+	uint32_t out = 0;
+	for (uint64_t k = 0; k < cells; k++) {
+		uint32_t s0 = lb->start[k], s1 = lb->start[k + 1];
+		lb->start[k] = out;
+		for (uint32_t m = s0; m < s1; m++) {
+			uint32_t *st = &stamp[stamp_slot(g, lb->ent[m].ref)];
+			if (*st != (uint32_t)k + 1) {
+				*st = (uint32_t)k + 1;
+				lb->ent[out++] = lb->ent[m];
+			}
+		}
+	}
+	lb->start[cells] = out;
+	free(rects);
+	free(cnt);
+	free(stamp);
+	return lb;
+over:
+	free(rects);
+	free(cnt);
+	free(stamp);
+	lbuf_free(lb);
+	return NULL;
+oom:
+	*oom = true;
+	goto over;
+}
+
+int accel_light_build(struct accel *A, const struct group *g, const struct geom_box *boxes, const uint32_t *perm)
+{
+	const struct scene *s = A->s;
+	if (s->image.no_shadows || g->occ_pretest || g->n_refs < LBUF_MIN_REFS || g->n_refs > LBUF_MAX_REFS || !g->refs ||
+	    !s->n_lights)
+		return 0;
+	A->lbuf = calloc(s->n_lights, sizeof *A->lbuf);
+	if (!A->lbuf)
+		return -1;
+	uint64_t left = LBUF_ALL_ENTRIES;
+	for (uint32_t i = 0, made = 0; i < s->n_lights && made < LBUF_MAX_LIGHTS; i++) {
+		const struct scene_light *l = &s->lights[i];
+		if (l->shape != LIGHT_POINT || l->no_shadows)
+			continue;
+		bool oom = false;
+		struct lbuf *lb = lbuf_build(g, boxes, perm, l->position, left, &oom);
+		if (oom)
+			return -1;
+		if (!lb)
+			continue;
+		A->lbuf[i] = lb;
+		made++;
+		left -= lb->start[6 * (size_t)LBUF_N * LBUF_N];
+		A->st.bytes += sizeof *A->lbuf[i] + (6 * (size_t)LBUF_N * LBUF_N + 1) * sizeof(uint32_t) +
+				       (size_t)A->lbuf[i]->start[6 * (size_t)LBUF_N * LBUF_N] * sizeof(struct lbuf_ent);
+	}
+	return 0;
+}
+
+void accel_light_free(struct accel *A)
+{
+	if (!A->lbuf)
+		return;
+	for (uint32_t i = 0; i < A->s->n_lights; i++)
+		lbuf_free(A->lbuf[i]);
+	free(A->lbuf);
+	A->lbuf = NULL;
+}
