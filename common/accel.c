@@ -37,7 +37,9 @@
  * hit for accel_occluded. Packets of four rays (accel_intersect4, accel_occluded4,
  * accel_packet.c), and of 16 or 64 from one origin (accel_intersect16,
  * accel_intersect64), share one walk of the root group's tree; a last-blocker hint
- * (accel_occluded_hint) is tested before the tree. Instances recurse into their define's group (depth
+ * (accel_occluded_hint) is tested before the tree. A single shadow ray
+ * toward a point light may skip the tree for the light's LIGHT BUFFER
+ * (accel_occluded_light; accel_int.h, accel_light.c). Instances recurse into their define's group (depth
  * bounded by LIM_DEFINE_DEPTH); the closest hit is completed (normal, uv,
  * mp, material) once per group, in the group's space, then carried out
  * through each instance's transform. In the root group, u, v and mp of
