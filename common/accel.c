@@ -925,18 +925,28 @@ bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ra
 	struct trace t;
 	trace_init(&t, r->o, r->d, ray_tmin(r), r->tmax);
 	const struct group *g = a->root;
-	if (hint_occludes(a, g, *hint, &t))
-		return true;
 	vec3 d = v3_sub(lb->lp, r->o);
 	double ux = -r->d.x, uy = -r->d.y, uz = -r->d.z;
 	double ax = fabs(ux), ay = fabs(uy), az = fabs(uz);
 	double depth = fmax(ax, fmax(ay, az));
 	if (!(t.tmax <= 1) || d.x != r->d.x || d.y != r->d.y || d.z != r->d.z || !(depth <= lb->R)) {
-		if (group_occluded_who(a, g, &t, hint))
+		if (hint_occludes(a, g, *hint, &t) || group_occluded_who(a, g, &t, hint))
 			return true;
 		*hint = ACCEL_NO_HINT;
 		return false;
 	}
+	uint32_t face;
+	double p, q;
+	if (ax >= ay && ax >= az)
+		face = ux < 0, p = uy / ax, q = uz / ax;
+	else if (ay >= az)
+		face = 2 + (uy < 0), p = ux / ay, q = uz / ay;
+	else
+		face = 4 + (uz < 0), p = ux / az, q = uy / az;
+	uint32_t cell = (face * lb->n + lbuf_cell(lb, q)) * lb->n + lbuf_cell(lb, p);
+	__builtin_prefetch(&lb->start[cell]); /* its load waits on memory: under the hint's test */
+	if (hint_occludes(a, g, *hint, &t))
+		return true;
 	for (uint32_t k = 0; k < g->n_unb; k++) {
 		if (cancel_poll_every(k)) /* CANCELLATION, as accel_unb_hit */
 			return false;
@@ -950,15 +960,6 @@ bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ra
 			*hint = lb->near[k];
 			return true;
 		}
-	uint32_t face;
-	double p, q;
-	if (ax >= ay && ax >= az)
-		face = ux < 0, p = uy / ax, q = uz / ax;
-	else if (ay >= az)
-		face = 2 + (uy < 0), p = ux / ay, q = uz / ay;
-	else
-		face = 4 + (uz < 0), p = ux / az, q = uy / az;
-	uint32_t cell = (face * lb->n + lbuf_cell(lb, q)) * lb->n + lbuf_cell(lb, p);
 	const struct lbuf_ent *e = lb->ent + lb->start[cell], *end = lb->ent + lb->start[cell + 1];
 	double lim = depth * (1 + 1e-9);
 	for (uint32_t k = 0; e < end && e->dmin <= lim; e++, k++) {
