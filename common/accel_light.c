@@ -225,33 +225,31 @@ static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *box
 	for (uint32_t k = 0; k < nn; k++)
 		stamp[stamp_slot(g, lb->near[k])] = 0;
 	lb->n_near = nn;
+	/* a counting sort in one array: start[k + 1] counts cell k's entries,
+	 * then (summed) is cell k's end; the rectangles, filled last first,
+	 * move it down to cell k's first entry, each cell nearest first */
+	lb->start = cnt;
+	cnt = NULL;
+	uint32_t *start = lb->start;
 	for (uint32_t k = 0; k < n_rects; k++) {
 		const struct lrect *r = &rects[k];
 		for (uint32_t j = r->j0; j <= r->j1; j++)
 			for (uint32_t i = r->i0; i <= r->i1; i++)
-				cnt[((uint64_t)r->face * LBUF_N + j) * LBUF_N + i]++;
+				start[((uint64_t)r->face * LBUF_N + j) * LBUF_N + i + 1]++;
 	}
-	/* cnt becomes the cells' starts, then their fill positions */
-	uint32_t at = 0;
-	for (uint64_t k = 0; k < cells; k++) {
-		uint32_t c = cnt[k];
-		cnt[k] = at;
-		at += c;
-	}
-	cnt[cells] = at;
-	lb->start = malloc((cells + 1) * sizeof *lb->start);
-	if (!lb->start)
-		goto oom;
-	for (uint64_t k = 0; k <= cells; k++)
-		lb->start[k] = cnt[k];
-	for (uint32_t k = 0; k < n_rects; k++) {
+	for (uint64_t k = 0; k < cells; k++)
+		start[k + 1] += start[k];
+	uint32_t all = start[cells];
+	for (uint32_t k = n_rects; k-- > 0;) {
 		const struct lrect *r = &rects[k];
 		for (uint32_t j = r->j0; j <= r->j1; j++)
-			for (uint32_t i = r->i0; i <= r->i1; i++) {
-				uint32_t *pos = &cnt[((uint64_t)r->face * LBUF_N + j) * LBUF_N + i];
-				lb->ent[(*pos)++] = (struct lbuf_ent){ r->dmin, r->ref };
-			}
+			for (uint32_t i = r->i0; i <= r->i1; i++)
+				lb->ent[--start[((uint64_t)r->face * LBUF_N + j) * LBUF_N + i + 1]] =
+					(struct lbuf_ent){ r->dmin, r->ref };
 	}
+	for (uint64_t k = 0; k < cells; k++) /* start[k + 1] is cell k's first entry now */
+		start[k] = start[k + 1];
+	start[cells] = all;
 	/* each cell nearest first (the rectangles were), one entry per
 	 * reference (a sliced cylinder or a split triangle has several boxes):
 	 * the first, nearest; stamp[slot] = 1 + the last cell that has it */
