@@ -9,8 +9,11 @@
  *   hint     accel_occluded_hint with one last-blocker hint per light
  *   packet   accel_occluded4 over the rays of one 2x2 block toward one
  *            light, one hint per light (what the renderer does)
+ *   light    accel_occluded_light, one ray at a time with one hint per
+ *            light: the light's LIGHT BUFFER where it has one (what the
+ *            renderer does for the shadow rays of reflection hits)
  * and prints the best frame's rate in Mrays/s of thread CPU time, and a
- * hash of the answers, which must be the same all three ways.
+ * hash of the answers, which must be the same all four ways.
  *
  *   bench_shadow [SCENE [FRAMES [WIDTHxHEIGHT]]]
  *
@@ -92,7 +95,7 @@ static int make_rays(const struct scene *sc, const struct accel *a, const struct
 	return 0;
 }
 
-enum mode { SINGLE, HINT, PACKET };
+enum mode { SINGLE, HINT, PACKET, LIGHT, N_MODES };
 
 /* One pass over the rays; returns the hash of the answers. */
 static uint64_t pass(const struct accel *a, const struct set *s, enum mode m, uint32_t n_lights)
@@ -110,8 +113,9 @@ static uint64_t pass(const struct accel *a, const struct set *s, enum mode m, ui
 			accel_occluded4(a, p->r, occ, &hint[p->light]);
 		else
 			for (int i = 0; i < p->n; i++)
-				occ[i] = m == HINT ? accel_occluded_hint(a, &p->r[i], &hint[p->light])
-						   : accel_occluded(a, &p->r[i]);
+				occ[i] = m == HINT    ? accel_occluded_hint(a, &p->r[i], &hint[p->light])
+					 : m == LIGHT ? accel_occluded_light(a, p->light, &p->r[i], &hint[p->light])
+						      : accel_occluded(a, &p->r[i]);
 		for (int i = 0; i < p->n; i++)
 			h64 = (h64 ^ (uint64_t)occ[i]) * 1099511628211ull;
 	}
@@ -138,13 +142,13 @@ int main(int argc, char **argv)
 		printf("%s: degenerate camera or out of memory\n", path);
 		return 1;
 	}
-	static const char *names[] = { "single", "hint", "packet" };
-	uint64_t hash[3];
-	double best[3] = { INFINITY, INFINITY, INFINITY };
-	for (int m = 0; m < 3; m++)
+	static const char *names[N_MODES] = { "single", "hint", "packet", "light" };
+	uint64_t hash[N_MODES];
+	double best[N_MODES] = { INFINITY, INFINITY, INFINITY, INFINITY };
+	for (int m = 0; m < N_MODES; m++)
 		hash[m] = pass(a, &s, (enum mode)m, sc->n_lights);
-	for (int f = 0; f < frames; f++) /* interleaved, so a load change hits all three */
-		for (int m = 0; m < 3; m++) {
+	for (int f = 0; f < frames; f++) /* interleaved, so a load change hits all of them */
+		for (int m = 0; m < N_MODES; m++) {
 			double t0 = bs_cpu_now();
 			pass(a, &s, (enum mode)m, sc->n_lights);
 			double t = bs_cpu_now() - t0;
@@ -152,7 +156,7 @@ int main(int argc, char **argv)
 		}
 	printf("%s %ux%u: %zu shadow rays (%.2f per pixel), best of %d, thread CPU time:\n", path, w, h, s.rays,
 	       (double)s.rays / ((double)w * h), frames);
-	for (int m = 0; m < 3; m++)
+	for (int m = 0; m < N_MODES; m++)
 		printf("  %-6s %6.2f Mrays/s; answers hash %016llx%s\n", names[m], (double)s.rays / best[m] * 1e-6,
 		       (unsigned long long)hash[m], hash[m] == hash[0] ? "" : " MISMATCH");
 	free(s.p);
