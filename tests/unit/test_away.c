@@ -17,20 +17,10 @@
 #include "common/accel_trace.h"
 #include "common/rng.h"
 #include "tests/unit/check.h"
+#define RAND_VEC_SEED 0x243f6a8885a308d3ull
+#include "tests/unit/rand_vec.h"
 
 #define N_RAYS 400000
-
-static uint64_t state = 0x243f6a8885a308d3ull;
-static double uniform(void) { return (double)(rng_mix(state++) >> 11) * 0x1p-53; }
-static vec3 unit(void)
-{
-	for (;;) {
-		vec3 v = v3(2 * uniform() - 1, 2 * uniform() - 1, 2 * uniform() - 1);
-		double l = v3_len(v);
-		if (l > 0.1 && l <= 1)
-			return v3_scale(v, 1 / l);
-	}
-}
 
 /* A start at distance rad (1 + e) from a centre (or axis) along n: on the
  * surface, 1e-9 out or in (relative, and as shade.c's offset: of the

@@ -22,19 +22,10 @@
 #include "common/rng.h"
 #include "common/scene.h"
 #include "tests/unit/check.h"
+#define RAND_VEC_SEED 0x13198a2e03707344ull
+#include "tests/unit/rand_vec.h"
 
-static uint64_t state = 0x13198a2e03707344ull;
-static double uniform(void) { return (double)(rng_mix(state++) >> 11) * 0x1p-53; }
 static double range(double a, double b) { return a + (b - a) * uniform(); }
-static vec3 unit(void)
-{
-	for (;;) {
-		vec3 v = v3(2 * uniform() - 1, 2 * uniform() - 1, 2 * uniform() - 1);
-		double l = v3_len(v);
-		if (l > 0.1 && l <= 1)
-			return v3_scale(v, 1 / l);
-	}
-}
 
 /* The lights: far, among the objects, on sphere 0's surface (centre
  * (0 0 0), radius 1), inside sphere 1, on the box's top face. */
