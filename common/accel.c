@@ -765,14 +765,8 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 static inline __attribute__((always_inline)) bool group_occluded_t(const struct accel *A, const struct group *g,
 								    struct trace *r, const bool chunked, uint32_t *who)
 {
-	for (uint32_t k = 0; k < g->n_unb; k++) {
-		if (cancel_poll_every(k)) /* CANCELLATION, as accel_unb_hit */
-			return false;
-		if (unb_occludes(A, g, k, r)) {
-			*who = g->unb[k];
-			return true;
-		}
-	}
+	if (unb_any_occludes(A, g, r, who))
+		return true;
 	if (g->bvh.root_n) {
 		if (box_hit(g->bvh.root_b, g->center, r))
 			for (uint32_t k = 0; k < g->bvh.root_n; k++)
@@ -918,23 +912,17 @@ bool accel_occluded_hint(const struct accel *a, const struct ray *r, uint32_t *h
 bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ray *r, uint32_t *hint)
 {
 	const struct lbuf *lb = a->lbuf && light < a->s->n_lights ? a->lbuf[light] : NULL;
-	if (!lb)
+	if (!lb || !a->root || !ray_ok(r))
 		return accel_occluded_hint(a, r, hint);
-	if (!a->root || !ray_ok(r))
-		return false;
-	struct trace t;
-	trace_init(&t, r->o, r->d, ray_tmin(r), r->tmax);
-	const struct group *g = a->root;
 	vec3 d = v3_sub(lb->lp, r->o);
 	double ux = -r->d.x, uy = -r->d.y, uz = -r->d.z;
 	double ax = fabs(ux), ay = fabs(uy), az = fabs(uz);
 	double depth = fmax(ax, fmax(ay, az));
-	if (!(t.tmax <= 1) || d.x != r->d.x || d.y != r->d.y || d.z != r->d.z || !(depth <= lb->R)) {
-		if (hint_occludes(a, g, *hint, &t) || group_occluded_who(a, g, &t, hint))
-			return true;
-		*hint = ACCEL_NO_HINT;
-		return false;
-	}
+	if (!(r->tmax <= 1) || d.x != r->d.x || d.y != r->d.y || d.z != r->d.z || !(depth <= lb->R))
+		return accel_occluded_hint(a, r, hint); /* not a ray the buffer answers for */
+	struct trace t;
+	trace_init(&t, r->o, r->d, ray_tmin(r), r->tmax);
+	const struct group *g = a->root;
 	uint32_t face;
 	double p, q;
 	if (ax >= ay && ax >= az)
@@ -945,21 +933,16 @@ bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ra
 		face = 4 + (uz < 0), p = ux / az, q = uy / az;
 	uint32_t cell = (face * lb->n + lbuf_cell(lb, q)) * lb->n + lbuf_cell(lb, p);
 	__builtin_prefetch(&lb->start[cell]); /* its load waits on memory: under the hint's test */
-	if (hint_occludes(a, g, *hint, &t))
+	if (hint_occludes(a, g, *hint, &t) || unb_any_occludes(a, g, &t, hint))
 		return true;
-	for (uint32_t k = 0; k < g->n_unb; k++) {
-		if (cancel_poll_every(k)) /* CANCELLATION, as accel_unb_hit */
+	for (uint32_t k = 0; k < lb->n_near; k++) {
+		if (cancel_poll_every(k)) /* CANCELLATION, as a leaf's references */
 			return false;
-		if (unb_occludes(a, g, k, &t)) {
-			*hint = g->unb[k];
-			return true;
-		}
-	}
-	for (uint32_t k = 0; k < lb->n_near; k++)
 		if (ref_occludes(a, g, lb->near[k], &t)) {
 			*hint = lb->near[k];
 			return true;
 		}
+	}
 	const struct lbuf_ent *e = lb->ent + lb->start[cell], *end = lb->ent + lb->start[cell + 1];
 	double lim = depth * (1 + 1e-9);
 	for (uint32_t k = 0; e < end && e->dmin <= lim; e++, k++) {

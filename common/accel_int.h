@@ -179,7 +179,6 @@ struct lbuf {
 	vec3 lp;         /* the light's position */
 	double R;        /* answers for origins with |o - lp|_inf <= R */
 	uint32_t n;      /* cells per face side */
-	double half_n;   /* n / 2 */
 	uint32_t *start; /* cell k's entries: ent[start[k] .. start[k + 1]) */
 	struct lbuf_ent *ent;
 	uint32_t *near; /* references whose boxes come within 3D of the light,
@@ -191,7 +190,7 @@ struct lbuf {
  * queries: the same monotonic rounding). */
 static inline uint32_t lbuf_cell(const struct lbuf *lb, double p)
 {
-	double x = (p + 1) * lb->half_n;
+	double x = (p + 1) * (0.5 * lb->n);
 	if (!(x > 0))
 		return 0;
 	return x >= (double)lb->n ? lb->n - 1 : (uint32_t)x;
@@ -284,11 +283,11 @@ static inline vec3 tri_normal(const struct gmesh *m, const uint32_t *ix)
  * (tests/unit/test_bvh.c checks).
  */
 #define BOX_PAD_REL 0x1p-19
+#define BOX_WIDEN 0x1p-20
 
 /* Makes A->lbuf for the root group g from its references' boxes (boxes[perm[k]]
  * is reference k's, relative to g->center and padded); 0, or -1 out of memory. */
 int accel_light_build(struct accel *A, const struct group *g, const struct geom_box *boxes, const uint32_t *perm);
 void accel_light_free(struct accel *A);
-#define BOX_WIDEN 0x1p-20
 
 #endif

@@ -54,6 +54,7 @@
  * of fewer than LBUF_MIN_REFS references keep the tree alone (a few
  * nodes deep), and so do those of more than LBUF_MAX_REFS. */
 #define LBUF_N 128
+#define LBUF_CELLS (6 * (uint64_t)LBUF_N * LBUF_N)
 #define LBUF_REF_ENTRIES 24
 #define LBUF_WIDE 16
 #define LBUF_CELL_ENTRIES 2
@@ -158,7 +159,6 @@ static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *box
 		goto oom;
 	lb->lp = lp;
 	lb->n = LBUF_N;
-	lb->half_n = 0.5 * LBUF_N;
 	vec3 e = v3_sub(g->center, lp);
 	double R = 0;
 	for (uint32_t k = 0; k < n; k++) {
@@ -171,7 +171,7 @@ static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *box
 	double D = LBUF_NEAR * R;
 	uint32_t n_rects = 0;
 	uint64_t total = 0;
-	const uint64_t cells = 6 * (uint64_t)LBUF_N * LBUF_N;
+	const uint64_t cells = LBUF_CELLS;
 	uint64_t budget = (uint64_t)n * LBUF_REF_ENTRIES + cells * LBUF_CELL_ENTRIES;
 	if (budget > left)
 		budget = left;
@@ -266,6 +266,14 @@ static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *box
 		}
 	}
 	lb->start[cells] = out;
+	/* what dedupe left: the arrays at their sizes (shrinking never fails
+	 * for good: the old block stays if realloc says no) */
+	struct lbuf_ent *ent_fit = realloc(lb->ent, (out ? out : 1) * sizeof *lb->ent);
+	if (ent_fit)
+		lb->ent = ent_fit;
+	uint32_t *near_fit = realloc(lb->near, (lb->n_near ? lb->n_near : 1) * sizeof *lb->near);
+	if (near_fit)
+		lb->near = near_fit;
 	free(rects);
 	free(cnt);
 	free(stamp);
@@ -303,9 +311,10 @@ int accel_light_build(struct accel *A, const struct group *g, const struct geom_
 			continue;
 		A->lbuf[i] = lb;
 		made++;
-		left -= lb->start[6 * (size_t)LBUF_N * LBUF_N];
-		A->st.bytes += sizeof *A->lbuf[i] + (6 * (size_t)LBUF_N * LBUF_N + 1) * sizeof(uint32_t) +
-				       (size_t)A->lbuf[i]->start[6 * (size_t)LBUF_N * LBUF_N] * sizeof(struct lbuf_ent);
+		left -= lb->start[LBUF_CELLS];
+		A->st.bytes += sizeof *lb + (LBUF_CELLS + 1) * sizeof *lb->start +
+			       (size_t)lb->start[LBUF_CELLS] * sizeof *lb->ent +
+			       (size_t)lb->n_near * sizeof *lb->near;
 	}
 	return 0;
 }

@@ -824,17 +824,7 @@ static void group_occluded4(const struct accel *A, const struct group *g, struct
 {
 	unsigned active = 0;
 	for (int i = 0; i < 4; i++) {
-		bool blocked = false;
-		for (uint32_t k = 0; k < g->n_unb && !blocked; k++) {
-			if (cancel_poll_every(k)) /* CANCELLATION, as accel_unb_hit */
-				break;
-			if (unb_occludes(A, g, k, &tr[i])) {
-				blocked = true;
-				*hint = g->unb[k];
-			}
-		}
-		if (!blocked)
-			blocked = hint_occludes(A, g, *hint, &tr[i]);
+		bool blocked = unb_any_occludes(A, g, &tr[i], hint) || hint_occludes(A, g, *hint, &tr[i]);
 		active |= (unsigned)!blocked << i;
 	}
 	if (active) {

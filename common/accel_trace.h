@@ -19,6 +19,7 @@
 #endif
 
 #include "common/accel_int.h"
+#include "common/cancel.h"
 
 /* Subtrees a traversal pops between polls of the cancel flag: each pop
  * follows a leaf (at most ACCEL_LEAF_CHUNK references, instances polling
@@ -321,6 +322,22 @@ static inline bool unb_occludes(const struct accel *A, const struct group *g, ui
 {
 	double t;
 	return g->plane1 ? plane1_hit(g, r, &t) : ref_occludes(A, g, g->unb[k], r);
+}
+
+/* Whether one of g's unbounded references blocks r (on true *who names
+ * it); false too when the render is cancelled (CANCELLATION, as
+ * accel_unb_hit). */
+static inline bool unb_any_occludes(const struct accel *A, const struct group *g, struct trace *r, uint32_t *who)
+{
+	for (uint32_t k = 0; k < g->n_unb; k++) {
+		if (cancel_poll_every(k))
+			return false;
+		if (unb_occludes(A, g, k, r)) {
+			*who = g->unb[k];
+			return true;
+		}
+	}
+	return false;
 }
 
 /* Whether ref names a reference of g (kind and index in range): a hint
