@@ -35,6 +35,7 @@ struct trace {
 	double inv_dd; /* 1 / |d|^2 */
 	double tmin, tmax;
 	bool w_ready;  /* w is set up (on the first triangle test) */
+	uint32_t last_x; /* the xprim reference tested last (MAILBOX), or UINT32_MAX */
 	struct geom_wray w;
 };
 
@@ -55,6 +56,7 @@ static inline void trace_init(struct trace *r, vec3 o, vec3 d, double tmin, doub
 	double a = v3_dot(d, d);
 	r->inv_dd = a > 0 ? 1.0 / a : 0;
 	r->w_ready = false;
+	r->last_x = UINT32_MAX;
 	r->tmin = tmin;
 	r->tmax = tmax;
 }
@@ -237,6 +239,31 @@ static inline __attribute__((always_inline)) bool tri_occludes(const struct grou
 			      &b2);
 }
 
+/*
+ * MAILBOX. A long cylinder is referenced by the boxes of its slices
+ * (LONG CYLINDERS, accel_build.c), so a ray that meets two of them tests
+ * it twice; the trace keeps the xprim reference it tested last, and a
+ * second test of it in a row is skipped. That changes no answer:
+ *   - closest hit: a reference's test reports its first hit after tmin if
+ *     it is below tmax, whatever tmax is, and during one query tmin stays
+ *     and tmax only falls. So the second test would miss (the first hit
+ *     was at or past the old tmax, or there was none) or find the same t,
+ *     which the first test then took or found beaten, and which does not
+ *     beat itself (CANONICAL TIES);
+ *   - any hit: the first test missed, or the query would have ended, and
+ *     tmax is fixed.
+ * rings_s3: 620,708 of 7.8 M cylinder tests a frame (docs/performance.md,
+ * round 14). Only xprims: spheres and triangles have one box each but for
+ * split slivers, whose tests in blocks have no room for the check.
+ */
+static inline bool mailbox_seen(struct trace *r, uint32_t ref)
+{
+	if (r->last_x == ref)
+		return true;
+	r->last_x = ref;
+	return false;
+}
+
 /* Tests one reference; on a hit in (r->tmin, r->tmax) that beats *c
  * (CANONICAL TIES) records it in *c and narrows r->tmax. */
 static inline __attribute__((always_inline)) bool ref_test(const struct accel *A, const struct group *g,
@@ -253,6 +280,8 @@ static inline __attribute__((always_inline)) bool ref_test(const struct accel *A
 		return tri_test(g, ref, r, c);
 	case REF_XPRIM: {
 		const struct xprim *x = &g->xp[i];
+		if (mailbox_seen(r, ref))
+			return false;
 		if (x->r > 0 || x->g->kind != PRIM_CSG) /* OPEN CYLINDERS read no geom_obj */
 			return accel_xprim_test(x, ref, r, c);
 		return accel_ref_test_slow(A, g, ref, r, c, brute);
@@ -279,7 +308,9 @@ static inline bool ref_occludes(const struct accel *A, const struct group *g, ui
 	default: { /* an xprim: accel_xprim_test's answer without a candidate, but CSG */
 		const struct xprim *x = &g->xp[i];
 		if (x->r <= 0 && x->g->kind == PRIM_CSG) /* OPEN CYLINDERS read no geom_obj */
-			break;
+			break; /* (ref_test's mailbox below) */
+		if (mailbox_seen(r, ref))
+			return false;
 		return accel_xprim_occludes(x, r);
 	}
 	}
