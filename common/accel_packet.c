@@ -153,22 +153,26 @@ struct tri4 {
 };
 
 /* Sets up the pre-test for the packet (the rays' watertight set-up too). */
+/* Field f (a double) of the four rays' set-ups, each rounded to float,
+ * into one vector: two conversions of pairs loaded as doubles, not four
+ * scalar stores that one vector load would have to wait for (store
+ * forwarding fails across them). */
+#define TRI4_LANES(w, f) \
+	_mm_movelh_ps(_mm_cvtpd_ps(_mm_set_pd((w)[1]->f, (w)[0]->f)), _mm_cvtpd_ps(_mm_set_pd((w)[3]->f, (w)[2]->f)))
+
 static void tri4_init(struct tri4 *q, struct trace tr[4])
 {
-	float ox[4], oy[4], oz[4], sx[4], sy[4], so[4];
-	const struct geom_wray *w0 = trace_wray(&tr[0]);
+	const struct geom_wray *w[4];
+	for (int i = 0; i < 4; i++)
+		w[i] = trace_wray(&tr[i]);
+	q->kx = w[0]->kx, q->ky = w[0]->ky, q->kz = w[0]->kz;
 	q->ok = true;
-	q->kx = w0->kx, q->ky = w0->ky, q->kz = w0->kz;
-	for (int i = 0; i < 4; i++) {
-		const struct geom_wray *w = trace_wray(&tr[i]);
-		q->ok &= w->kx == q->kx && w->ky == q->ky && w->kz == q->kz;
-		ox[i] = (float)w->ox, oy[i] = (float)w->oy, oz[i] = (float)w->oz;
-		sx[i] = (float)w->sx, sy[i] = (float)w->sy;
-		float m = fabsf(ox[i]) > fabsf(oy[i]) ? fabsf(ox[i]) : fabsf(oy[i]);
-		so[i] = m > fabsf(oz[i]) ? m : fabsf(oz[i]);
-	}
-	q->ox = _mm_loadu_ps(ox), q->oy = _mm_loadu_ps(oy), q->oz = _mm_loadu_ps(oz);
-	q->sx = _mm_loadu_ps(sx), q->sy = _mm_loadu_ps(sy), q->so = _mm_loadu_ps(so);
+	for (int i = 1; i < 4; i++)
+		q->ok &= w[i]->kx == q->kx && w[i]->ky == q->ky && w[i]->kz == q->kz;
+	q->ox = TRI4_LANES(w, ox), q->oy = TRI4_LANES(w, oy), q->oz = TRI4_LANES(w, oz);
+	q->sx = TRI4_LANES(w, sx), q->sy = TRI4_LANES(w, sy);
+	/* max(|ox|, |oy|, |oz|) as `a > b ? a : b` in float, which maxps is */
+	q->so = _mm_max_ps(_mm_max_ps(abs4(q->ox), abs4(q->oy)), abs4(q->oz));
 }
 
 /* The rays (bit i: ray i) that lane l's triangle of block tb certainly
