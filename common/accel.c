@@ -931,7 +931,7 @@ bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ra
 		face = 2 + (uy < 0), p = ux / ay, q = uz / ay;
 	else
 		face = 4 + (uz < 0), p = ux / az, q = uy / az;
-	uint32_t cell = (face * lb->n + lbuf_cell(lb, q)) * lb->n + lbuf_cell(lb, p);
+	uint32_t cell = (face * lb->n + lbuf_cell(lb, face, 1, q)) * lb->n + lbuf_cell(lb, face, 0, p);
 	__builtin_prefetch(&lb->start[cell]); /* its load waits on memory: under the hint's test */
 	if (hint_occludes(a, g, *hint, &t) || unb_any_occludes(a, g, &t, hint))
 		return true;

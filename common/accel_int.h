@@ -179,6 +179,10 @@ struct lbuf {
 	vec3 lp;         /* the light's position */
 	double R;        /* answers for origins with |o - lp|_inf <= R */
 	uint32_t n;      /* cells per face side */
+	/* ZOOMED FACES: face f's cells cover its window org[f][k] ..
+	 * org[f][k] + n / scale[f][k] on axis k (0: p, 1: q), where its small
+	 * references lie; projections beyond it go to the edge cells */
+	double org[6][2], scale[6][2];
 	uint32_t *start; /* cell k's entries: ent[start[k] .. start[k + 1]) */
 	struct lbuf_ent *ent;
 	uint32_t *near; /* references whose boxes come within 3D of the light,
@@ -186,11 +190,11 @@ struct lbuf {
 	uint32_t n_near;
 };
 
-/* The cell column or row of a projection p (both in the build and the
- * queries: the same monotonic rounding). */
-static inline uint32_t lbuf_cell(const struct lbuf *lb, double p)
+/* The cell column (k 0) or row (k 1) of projection p on face f (both in
+ * the build and the queries: the same monotonic rounding). */
+static inline uint32_t lbuf_cell(const struct lbuf *lb, uint32_t f, int k, double p)
 {
-	double x = (p + 1) * (0.5 * lb->n);
+	double x = (p - lb->org[f][k]) * lb->scale[f][k];
 	if (!(x > 0))
 		return 0;
 	return x >= (double)lb->n ? lb->n - 1 : (uint32_t)x;

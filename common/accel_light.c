@@ -31,9 +31,11 @@
  *     relative errors near 1e-16 (corners as (center - lp) + box: errors of
  *     1e-16 R against depths >= D, 1e-10 relative); padded by 1e-8, it
  *     holds X's projection with room to spare, and the cells are found by
- *     the same monotonic rounding (lbuf_cell) the query uses.
- *   - A box whose cells would be more than a 16th of all (LBUF_WIDE: the
- *     light is close to it) is WIDE: it joins the NEAR list instead.
+ *     the same monotonic rounding (lbuf_cell) the query uses, clamped to
+ *     the face's window (ZOOMED FACES, below), which is monotonic too.
+ *   - A box whose rectangles would cover more than a 16th of the cube's
+ *     faces (LBUF_WIDE: the light is close to it) is WIDE: it joins the
+ *     NEAR list instead.
  *   - X's depth is at most |U_a| (1 + u), so entries whose dmin (rounded
  *     down to float) exceeds |U_a| (1 + 1e-9) cannot hold a hit: the
  *     query stops there (entries sorted by dmin).
@@ -50,7 +52,7 @@
 /* Cells per face side. A light gets no buffer (the tree answers) when its
  * entries would exceed LBUF_REF_ENTRIES a reference plus LBUF_CELL_ENTRIES
  * a cell, or what is left of LBUF_ALL_ENTRIES for all lights (32 MB);
- * at most LBUF_MAX_LIGHTS lights get one (1.5 MB of cells each). Groups
+ * at most LBUF_MAX_LIGHTS lights get one (384 KiB of cell starts each). Groups
  * of fewer than LBUF_MIN_REFS references keep the tree alone (a few
  * nodes deep), and so do those of more than LBUF_MAX_REFS. */
 #define LBUF_N 128
@@ -80,14 +82,14 @@ static float f_down(double x)
 	return (double)f > x ? nextafterf(f, -INFINITY) : f;
 }
 
-/* The rectangle of box [lo, hi] (relative to the light) on face f, into
- * *r; false when the box has no point of depth >= D on it. */
-static bool face_rect(const struct lbuf *lb, vec3 lo, vec3 hi, int f, double D, struct lrect *r)
+/* The padded projection of box [lo, hi] (relative to the light) on face
+ * f: ext[0..1] its p range, ext[2..3] its q range, *dmin its nearest depth
+ * (>= D); false when the box has no point of depth >= D on the face. */
+static bool face_proj(vec3 lo, vec3 hi, int f, double D, double ext[4], double *dmin)
 {
 	int a = f >> 1, b = a == 0 ? 1 : 0, c = a == 2 ? 1 : 2;
 	double s = (f & 1) ? -1 : 1;
 	double d0 = s > 0 ? comp(lo, a) : -comp(hi, a), d1 = s > 0 ? comp(hi, a) : -comp(lo, a);
-	r->face = (uint16_t)f;
 	if (!(d1 >= D))
 		return false;
 	if (d0 < D)
@@ -106,10 +108,83 @@ static bool face_rect(const struct lbuf *lb, vec3 lo, vec3 hi, int f, double D, 
 	pmax += LBUF_PAD, qmax += LBUF_PAD;
 	if (pmax < -1 || pmin > 1 || qmax < -1 || qmin > 1) /* beside the face */
 		return false;
-	r->i0 = (uint16_t)lbuf_cell(lb, pmin), r->i1 = (uint16_t)lbuf_cell(lb, pmax);
-	r->j0 = (uint16_t)lbuf_cell(lb, qmin), r->j1 = (uint16_t)lbuf_cell(lb, qmax);
+	ext[0] = pmin, ext[1] = pmax, ext[2] = qmin, ext[3] = qmax;
+	*dmin = d0;
+	return true;
+}
+
+/* The rectangle of box [lo, hi] on face f in cells, into *r (face_proj),
+ * and *frac, the part of the whole face it covers. */
+static bool face_rect(const struct lbuf *lb, vec3 lo, vec3 hi, int f, double D, struct lrect *r, double *frac)
+{
+	double ext[4], d0;
+	if (!face_proj(lo, hi, f, D, ext, &d0))
+		return false;
+	*frac = (fmin(ext[1], 1) - fmax(ext[0], -1)) * (fmin(ext[3], 1) - fmax(ext[2], -1)) * 0.25;
+	r->face = (uint16_t)f;
+	r->i0 = (uint16_t)lbuf_cell(lb, (uint32_t)f, 0, ext[0]), r->i1 = (uint16_t)lbuf_cell(lb, (uint32_t)f, 0, ext[1]);
+	r->j0 = (uint16_t)lbuf_cell(lb, (uint32_t)f, 1, ext[2]), r->j1 = (uint16_t)lbuf_cell(lb, (uint32_t)f, 1, ext[3]);
 	r->dmin = f_down(d0);
 	return true;
+}
+
+/*
+ * ZOOMED FACES. A light sees the objects within a small part of each face
+ * (balls_s4's flake: about 30 x 30 of the 128 x 128 cells, 19 entries a
+ * cell), so each face's cells cover only the window where its small
+ * references project (those narrower than LBUF_SMALL on both axes), at
+ * most LBUF_ZOOM times finer than the whole face; larger ones, and rays,
+ * beyond the window fall in its edge cells. Any window gives the tree's
+ * answers: lbuf_cell is monotonic, clamping too, so a projection inside a
+ * reference's padded rectangle still lands in one of its cells.
+ */
+#define LBUF_ZOOM 4.0
+#define LBUF_SMALL 0.25
+#define LBUF_DENSE 0.5 /* small references a cell, at most, that zooming aims for */
+
+static void zoom_faces(struct lbuf *lb, const struct group *g, const struct geom_box *boxes, const uint32_t *perm,
+		       vec3 e, double D)
+{
+	double lo[6][2], hi[6][2];
+	uint32_t n_small[6] = { 0, 0, 0, 0, 0, 0 };
+	for (int f = 0; f < 6; f++)
+		for (int k = 0; k < 2; k++)
+			lo[f][k] = INFINITY, hi[f][k] = -INFINITY;
+	for (uint32_t i = 0; i < g->n_refs; i++) {
+		const struct geom_box *bx = &boxes[perm[i]];
+		vec3 blo = v3_add(e, bx->lo), bhi = v3_add(e, bx->hi);
+		for (int f = 0; f < 6; f++) {
+			double ext[4], d0;
+			if (!face_proj(blo, bhi, f, D, ext, &d0) || !(ext[1] - ext[0] < LBUF_SMALL) ||
+			    !(ext[3] - ext[2] < LBUF_SMALL))
+				continue;
+			for (int k = 0; k < 2; k++) {
+				lo[f][k] = fmin(lo[f][k], ext[2 * k]);
+				hi[f][k] = fmax(hi[f][k], ext[2 * k + 1]);
+			}
+			n_small[f]++;
+		}
+	}
+	for (int f = 0; f < 6; f++) {
+		/* the zoom that brings the window's small references down to
+		 * LBUF_DENSE a cell, 2 to LBUF_ZOOM, or none */
+		double wa = fmin(hi[f][0], 1) - fmax(lo[f][0], -1), wb = fmin(hi[f][1], 1) - fmax(lo[f][1], -1);
+		double cells1 = wa * wb * 0.25 * lb->n * lb->n; /* the window's cells at zoom 1 */
+		double z = cells1 > 0 ? sqrt(n_small[f] / (cells1 * LBUF_DENSE)) : 1;
+		z = z > LBUF_ZOOM ? LBUF_ZOOM : z < 2 ? 1 : z; /* less than twice finer: not worth the entries */
+		for (int k = 0; k < 2; k++) {
+			double a = fmax(lo[f][k], -1), b = fmin(hi[f][k], 1), w = 2 / z;
+			if (!(a < b) || z == 1) { /* nothing small, or sparse: the whole face */
+				a = -1, b = 1;
+			} else if (b - a < w) { /* centred, at most z finer, inside [-1, 1] */
+				double m = 0.5 * (a + b);
+				a = fmin(fmax(m - 0.5 * w, -1), 1 - w);
+				b = a + w;
+			}
+			lb->org[f][k] = a;
+			lb->scale[f][k] = lb->n / (b - a);
+		}
+	}
 }
 
 /* Rectangles nearest first (then by reference: the same order every build). */
@@ -169,6 +244,7 @@ static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *box
 	}
 	lb->R = R;
 	double D = LBUF_NEAR * R;
+	zoom_faces(lb, g, boxes, perm, e, D);
 	uint32_t n_rects = 0;
 	uint64_t total = 0;
 	const uint64_t cells = LBUF_CELLS;
@@ -191,15 +267,18 @@ static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *box
 		}
 		uint32_t n0 = n_rects;
 		uint64_t area = 0;
+		double faces = 0; /* how many whole faces its rectangles cover */
 		for (int f = 0; f < 6; f++) {
 			struct lrect *r = &rects[n_rects];
-			if (!face_rect(lb, lo, hi, f, D, r))
+			double frac;
+			if (!face_rect(lb, lo, hi, f, D, r, &frac))
 				continue;
 			r->ref = g->refs[k];
 			area += (uint64_t)(r->i1 - r->i0 + 1) * (uint64_t)(r->j1 - r->j0 + 1);
+			faces += frac;
 			n_rects++;
 		}
-		if (area > cells / LBUF_WIDE) { /* WIDE: tested by every query too */
+		if (faces > 6.0 / LBUF_WIDE) { /* WIDE: tested by every query too */
 			n_rects = n0;
 			lb->near[lb->n_near++] = g->refs[k];
 			continue;

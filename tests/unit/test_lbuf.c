@@ -28,9 +28,10 @@
 static double range(double a, double b) { return a + (b - a) * uniform(); }
 
 /* The lights: far, among the objects, on sphere 0's surface (centre
- * (0 0 0), radius 1), inside sphere 1, on the box's top face. */
+ * (0 0 0), radius 1), inside sphere 1, on the box's top face, and very
+ * far (the scene in a corner of one face: ZOOMED FACES). */
 static const vec3 lights[] = {
-	{ 30, 20, 25 }, { 0.3, 2.5, -0.7 }, { 1, 0, 0 }, { 3, 3, 3.05 }, { -2, -1.5, 1.25 },
+	{ 30, 20, 25 }, { 0.3, 2.5, -0.7 }, { 1, 0, 0 }, { 3, 3, 3.05 }, { -2, -1.5, 1.25 }, { 150, -90, 120 },
 };
 #define N_LIGHTS (sizeof lights / sizeof lights[0])
 
@@ -147,6 +148,15 @@ int main(void)
 			fprintf(stderr, "light %u: no buffer\n", i);
 		CHECK(a->lbuf && a->lbuf[i] != NULL);
 	}
+
+	/* ZOOMED FACES (accel_light.c): some face's cells cover a window
+	 * (the last light sees the whole scene in a small part of a face) */
+	int zoomed = 0;
+	for (uint32_t i = 0; i < N_LIGHTS; i++)
+		for (int f = 0; a->lbuf && a->lbuf[i] && f < 6; f++)
+			zoomed += a->lbuf[i]->scale[f][0] != 0.5 * a->lbuf[i]->n;
+	printf("test_lbuf: %d zoomed faces\n", zoomed);
+	CHECK(zoomed > 0);
 
 	const struct gsphere *sph = a->root->sph;
 	uint32_t n_sph = a->root->n_sph;
