@@ -163,8 +163,9 @@ struct group {
  * references sorted into the cells of a direction cube around the light:
  * 6 faces of n x n cells, face 2a (+a) or 2a + 1 (-a) for the axis a, cell
  * (i, j) of the face the directions whose projections p = u_b / |u_a|, q =
- * u_c / |u_a| (b < c the other axes) fall in [i, i + 1) x [j, j + 1) x 2/n
- * - 1. A shadow ray from o toward the light (d = lp - o, t in [0, 1]) lies
+ * u_c / |u_a| (b < c the other axes) fall in column i and row j of the
+ * face's window (lbuf_cell; the whole face, [-1, 1]^2, unless ZOOMED
+ * FACES in accel_light.c). A shadow ray from o toward the light (d = lp - o, t in [0, 1]) lies
  * along u = o - lp, so only the references of u's cell can block it
  * (accel_occluded_light); each cell's entries are sorted by dmin, the
  * nearest depth |X_a - lp_a| any point X of the reference's box has on the

@@ -142,15 +142,26 @@ static bool face_rect(const struct lbuf *lb, vec3 lo, vec3 hi, int f, double D, 
 #define LBUF_SMALL 0.25
 #define LBUF_DENSE 0.5 /* small references a cell, at most, that zooming aims for */
 
+/* Every face whole: no zoom. */
+static void whole_faces(struct lbuf *lb)
+{
+	for (int f = 0; f < 6; f++)
+		for (int k = 0; k < 2; k++)
+			lb->org[f][k] = -1, lb->scale[f][k] = 0.5 * lb->n;
+}
+
 static void zoom_faces(struct lbuf *lb, const struct group *g, const struct geom_box *boxes, const uint32_t *perm,
 		       vec3 e, double D)
 {
 	double lo[6][2], hi[6][2];
 	uint32_t n_small[6] = { 0, 0, 0, 0, 0, 0 };
+	whole_faces(lb);
 	for (int f = 0; f < 6; f++)
 		for (int k = 0; k < 2; k++)
 			lo[f][k] = INFINITY, hi[f][k] = -INFINITY;
 	for (uint32_t i = 0; i < g->n_refs; i++) {
+		if (cancel_poll_every(i))
+			return; /* lbuf_build's loop sees it too */
 		const struct geom_box *bx = &boxes[perm[i]];
 		vec3 blo = v3_add(e, bx->lo), bhi = v3_add(e, bx->hi);
 		for (int f = 0; f < 6; f++) {
@@ -167,16 +178,22 @@ static void zoom_faces(struct lbuf *lb, const struct group *g, const struct geom
 	}
 	for (int f = 0; f < 6; f++) {
 		/* the zoom that brings the window's small references down to
-		 * LBUF_DENSE a cell, 2 to LBUF_ZOOM, or none */
+		 * LBUF_DENSE a cell, 2 to LBUF_ZOOM, or none; an empty window
+		 * (NaN or infinite extents) fails the tests below */
 		double wa = fmin(hi[f][0], 1) - fmax(lo[f][0], -1), wb = fmin(hi[f][1], 1) - fmax(lo[f][1], -1);
 		double cells1 = wa * wb * 0.25 * lb->n * lb->n; /* the window's cells at zoom 1 */
 		double z = cells1 > 0 ? sqrt(n_small[f] / (cells1 * LBUF_DENSE)) : 1;
-		z = z > LBUF_ZOOM ? LBUF_ZOOM : z < 2 ? 1 : z; /* less than twice finer: not worth the entries */
+		z = z > LBUF_ZOOM ? LBUF_ZOOM : z;
+		/* on each axis at most z finer, and not at all where that would be
+		 * less than twice finer (not worth the entries) */
+		bool zoom = z >= 2;
+		for (int k = 0; k < 2; k++)
+			zoom &= fmin(hi[f][k], 1) - fmax(lo[f][k], -1) <= 1;
+		if (!zoom) /* nothing small, sparse, or spread over the face */
+			continue;
 		for (int k = 0; k < 2; k++) {
 			double a = fmax(lo[f][k], -1), b = fmin(hi[f][k], 1), w = 2 / z;
-			if (!(a < b) || z == 1) { /* nothing small, or sparse: the whole face */
-				a = -1, b = 1;
-			} else if (b - a < w) { /* centred, at most z finer, inside [-1, 1] */
+			if (b - a < w) { /* centred, z finer, inside [-1, 1] */
 				double m = 0.5 * (a + b);
 				a = fmin(fmax(m - 0.5 * w, -1), 1 - w);
 				b = a + w;
@@ -218,10 +235,10 @@ static void lbuf_free(struct lbuf *lb)
 	free(lb);
 }
 
-/* Light lp's buffer over g's n references; NULL when over budget (the
- * tree answers) or out of memory (*oom set). */
+/* Light lp's buffer over g's n references, its faces zoomed or whole;
+ * NULL when over budget (the tree answers) or out of memory (*oom set). */
 static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *boxes, const uint32_t *perm, vec3 lp,
-			       uint64_t left, bool *oom)
+			       uint64_t left, bool zoom, bool *oom)
 {
 	uint32_t n = g->n_refs;
 	struct lbuf *lb = calloc(1, sizeof *lb);
@@ -244,7 +261,10 @@ static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *box
 	}
 	lb->R = R;
 	double D = LBUF_NEAR * R;
-	zoom_faces(lb, g, boxes, perm, e, D);
+	if (zoom)
+		zoom_faces(lb, g, boxes, perm, e, D);
+	else
+		whole_faces(lb);
 	uint32_t n_rects = 0;
 	uint64_t total = 0;
 	const uint64_t cells = LBUF_CELLS;
@@ -383,7 +403,10 @@ int accel_light_build(struct accel *A, const struct group *g, const struct geom_
 		if (l->shape != LIGHT_POINT || l->no_shadows)
 			continue;
 		bool oom = false;
-		struct lbuf *lb = lbuf_build(g, boxes, perm, l->position, left, &oom);
+		struct lbuf *lb = lbuf_build(g, boxes, perm, l->position, left, true, &oom);
+		if (!lb && !oom) /* zoomed, the larger references can fill a window's
+				    cells beyond the budget: the whole faces, then */
+			lb = lbuf_build(g, boxes, perm, l->position, left, false, &oom);
 		if (oom)
 			return -1;
 		if (!lb)

@@ -242,8 +242,9 @@ static inline __attribute__((always_inline)) bool tri_occludes(const struct grou
 /*
  * MAILBOX. A long cylinder is referenced by the boxes of its slices
  * (LONG CYLINDERS, accel_build.c), so a ray that meets two of them tests
- * it twice; the trace keeps the xprim reference it tested last, and a
- * second test of it in a row is skipped. That changes no answer:
+ * it twice; the trace keeps the xprim reference it tested last (tests of
+ * other kinds between do not clear it), and a test of that reference again
+ * is skipped. That changes no answer, for any repeat within a query:
  *   - closest hit: a reference's test reports its first hit after tmin if
  *     it is below tmax, whatever tmax is, and during one query tmin stays
  *     and tmax only falls. So the second test would miss (the first hit

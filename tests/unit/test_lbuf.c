@@ -83,10 +83,10 @@ static char *scene_text(void)
 
 static long asked, blocked, lit, differ;
 
-/* One shadow ray from o toward light i, asked of both with three hints. */
-static void ask(const struct accel *a, uint32_t i, vec3 o)
+/* One shadow ray from o toward light i at lp, asked of both with three hints. */
+static void ask_lp(const struct accel *a, uint32_t i, vec3 lp, vec3 o)
 {
-	struct ray r = { o, v3_sub(lights[i], o), 0, 1 };
+	struct ray r = { o, v3_sub(lp, o), 0, 1 };
 	if (!(v3_dot(r.d, r.d) > 0))
 		return;
 	bool tree = accel_occluded(a, &r);
@@ -108,6 +108,62 @@ static void ask(const struct accel *a, uint32_t i, vec3 o)
 		blocked++;
 	else
 		lit++;
+}
+
+static void ask(const struct accel *a, uint32_t i, vec3 o) { ask_lp(a, i, lights[i], o); }
+
+static vec3 near_surface(vec3 c, double r);
+
+/*
+ * ZOOMED FACES over budget: a light at the origin, a dense cluster of 2,000
+ * small spheres 50 away (a zoomed window on face -x) and 15 larger spheres
+ * beyond it, each covering the whole window (16,384 cells zoomed, about
+ * 3,000 unzoomed): zoomed, the entries would pass the budget, so the
+ * buffer is built with whole faces instead of not at all; and it answers
+ * as the tree does.
+ */
+static void zoom_budget(void)
+{
+	size_t cap = 1 << 18, len = 0;
+	char *t = malloc(cap);
+	CHECK(t != NULL);
+	if (!t)
+		return;
+#define PUT(...) (len += (size_t)snprintf(t + len, cap - len, __VA_ARGS__))
+	PUT("camera look-from (0 0 10) look-at (0 0 0) ;\nimage xsize 4 ysize 4 ;\nlight position (0 0 0) ;\n");
+	for (int i = 0; i < 2000; i++)
+		PUT("object sphere centre (%.17g %.17g %.17g) radius 0.01 ; ;\n", range(-51, -49), range(-1, 1), range(-1, 1));
+	for (int k = 0; k < 15; k++) { /* box half-size / nearest depth about 0.43 */
+		double x = 60 + 30 * k;
+		PUT("object sphere centre (%.17g 0 0) radius %.17g ; ;\n", -x, 0.3 * x);
+	}
+#undef PUT
+	CHECK(len < cap);
+	struct scene *s = NULL;
+	struct scene_error err = { 0 };
+	CHECK(parse_buffer("budget.sce", t, len, 0, &s, &err) == 0);
+	free(t);
+	struct accel *a = NULL;
+	if (s)
+		CHECK(accel_build(s, &a, &err) == 0);
+	if (!a) {
+		scene_free(s);
+		return;
+	}
+	const struct lbuf *lb = a->lbuf ? a->lbuf[0] : NULL;
+	CHECK(lb != NULL); /* with whole faces */
+	if (lb)
+		CHECK(lb->scale[1][0] == 0.5 * lb->n && lb->scale[1][1] == 0.5 * lb->n);
+	long before = differ;
+	vec3 lp = v3(0, 0, 0);
+	for (int k = 0; k < 20000; k++) {
+		const struct gsphere *g = &a->root->sph[rng_mix(state++) % a->root->n_sph];
+		ask_lp(a, 0, lp, near_surface(v3_add(g->c, a->root->center), sqrt(g->r2)));
+		ask_lp(a, 0, lp, v3(range(-600, -40), range(-200, 200), range(-200, 200)));
+	}
+	printf("test_lbuf: over budget zoomed, a buffer of whole faces: %ld answers differ\n", differ - before);
+	accel_free(a);
+	scene_free(s);
 }
 
 /* A point on or just off a sphere of the scene (centre c, radius r), as
@@ -185,6 +241,7 @@ int main(void)
 			ask(a, i, v3_add(lp, u));
 		}
 	}
+	zoom_budget();
 	printf("test_lbuf: %ld queries, %ld blocked and %ld lit rays, %ld answers differ\n", asked, blocked, lit,
 	       differ);
 	CHECK(differ == 0);
