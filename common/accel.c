@@ -603,8 +603,10 @@ static __attribute__((noinline)) bool brute_hit(const struct accel *A, const str
 		}
 	}
 	for (uint32_t k = 0; k < g->n_refs; k++)
-		if (REF_KIND(group_ref(g, k)) >= REF_XPRIM)
+		if (REF_KIND(group_ref(g, k)) >= REF_XPRIM) {
+			r->last_x = UINT32_MAX; /* every test made: the reference the MAILBOX is checked against */
 			found |= ref_test(A, g, group_ref(g, k), r, best, true);
+		}
 	return found;
 }
 

@@ -482,7 +482,8 @@ static void mixed(void)
  * slices whose boxes leave out the disk's extent (e = 0) or end a quarter
  * of a slice short of each cut (a tenth is hidden by the disk's extent),
  * and with a MAILBOX (accel_trace.h: a slice's second test in a row
- * skipped) that skips every xprim after the first (29,003 mismatches) or
+ * skipped; brute force clears it before every test, so it is the check)
+ * that skips every xprim after the first (27,018 mismatches) or
  * is not reset for each query (4,186).
  */
 #define N_CYL 240
