@@ -39,6 +39,7 @@ static const vec3 lights[] = {
 static vec3 corners[8 + 3 * 20];
 static int n_corners;
 static vec3 tri_mid[20];
+static vec3 sliver[3]; /* the sliver beside light 1 */
 
 static char *scene_text(void)
 {
@@ -74,6 +75,16 @@ static char *scene_text(void)
 		corners[n_corners++] = b;
 		corners[n_corners++] = c;
 		tri_mid[i] = v3_scale(v3_add(a, v3_add(b, c)), 1.0 / 3);
+		PUT("object triangle a (%.17g %.17g %.17g) b (%.17g %.17g %.17g) c (%.17g %.17g %.17g) ; ;\n", a.x, a.y,
+		    a.z, b.x, b.y, b.z, c.x, c.y, c.z);
+	}
+	{ /* a long diagonal sliver about half a unit from light 1, split into pieces
+	     (LONG slivers, accel_build.c) of which several are WIDE: its NEAR
+	     entry's box is their union */
+		vec3 l = lights[1], o = v3(0.4, -0.4, 0.1);
+		vec3 a = v3_add(l, v3_add(o, v3(-3, -3, -3))), b = v3_add(l, v3_add(o, v3(3, 3, 3)));
+		vec3 c = v3_add(b, v3(0.05, -0.05, 0));
+		sliver[0] = a, sliver[1] = b, sliver[2] = c;
 		PUT("object triangle a (%.17g %.17g %.17g) b (%.17g %.17g %.17g) c (%.17g %.17g %.17g) ; ;\n", a.x, a.y,
 		    a.z, b.x, b.y, b.z, c.x, c.y, c.z);
 	}
@@ -234,6 +245,14 @@ int main(void)
 				x = v3_add(x, v3_scale(in, m < 20 ? 1e-9 : exp(range(log(1e-12), log(1e-3)))));
 				ask(a, i, v3_add(lp, v3_scale(v3_sub(x, lp), range(1.05, 4))));
 			}
+		for (int k = 0; i == 1 && k < 4000; k++) { /* through the sliver's pieces, from beyond it */
+			double u = uniform(), v = uniform();
+			if (u + v > 1)
+				u = 1 - u, v = 1 - v;
+			vec3 x = v3_add(sliver[0], v3_add(v3_scale(v3_sub(sliver[1], sliver[0]), u),
+							 v3_scale(v3_sub(sliver[2], sliver[0]), v)));
+			ask(a, i, v3_add(lp, v3_scale(v3_sub(x, lp), range(1.05, 4))));
+		}
 		for (int k = 0; k < 5000; k++) { /* on the cube's edges and along its axes */
 			double d = range(0.01, 10), e = range(-1, 1);
 			int f = (int)(rng_mix(state++) % 6);
