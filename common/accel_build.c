@@ -36,6 +36,7 @@ static void group_free(struct group *g)
 	free(g->sph);
 	free(g->mesh);
 	free(g->tri);
+	free(g->tri_flat);
 	free(g->xp);
 	free(g->inst);
 	free(g->bake);
@@ -300,6 +301,18 @@ static int push_pieces(struct refbuf *rb, uint32_t ref, const vec3 *poly, int n,
 			return -1;
 	}
 	return 0;
+}
+
+/* FLAT TRIANGLES (accel_trace.h): the axis whose coordinate a, b and c
+ * share bit for bit (the lowest), or 3. */
+static uint8_t flat_axis(const vec3 *a, const vec3 *b, const vec3 *c)
+{
+	for (int k = 0; k < 3; k++) {
+		double x = geom_comp(a, k), y = geom_comp(b, k), z = geom_comp(c, k);
+		if (memcmp(&x, &y, sizeof x) == 0 && memcmp(&x, &z, sizeof x) == 0)
+			return (uint8_t)k;
+	}
+	return 3;
 }
 
 static int push_triangle(struct refbuf *rb, uint32_t ref, vec3 a, vec3 b, vec3 c)
@@ -579,12 +592,13 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 	g->sph = malloc((n_sph ? n_sph : 1) * sizeof *g->sph);
 	g->mesh = malloc((n_mesh ? n_mesh : 1) * sizeof *g->mesh);
 	g->tri = malloc((n_tri ? n_tri : 1) * sizeof *g->tri);
+	g->tri_flat = malloc(n_tri ? n_tri : 1);
 	g->xp = malloc((n_xp ? n_xp : 1) * sizeof *g->xp);
 	g->inst = malloc((n_inst ? n_inst : 1) * sizeof *g->inst);
 	g->bake = malloc((n_bake ? n_bake : 1) * sizeof *g->bake);
-	if (!g->sph || !g->mesh || !g->tri || !g->xp || !g->inst || !g->bake)
+	if (!g->sph || !g->mesh || !g->tri || !g->tri_flat || !g->xp || !g->inst || !g->bake)
 		goto oom;
-	g->bytes = sizeof *g + n_sph * sizeof *g->sph + n_mesh * sizeof *g->mesh + n_tri * sizeof *g->tri +
+	g->bytes = sizeof *g + n_sph * sizeof *g->sph + n_mesh * sizeof *g->mesh + n_tri * (sizeof *g->tri + 1) +
 		   n_xp * sizeof *g->xp + n_inst * sizeof *g->inst + n_bake * sizeof *g->bake;
 
 	/* pass 2: fill; bounded references go to all[]/boxes[], the rest to unb
@@ -686,6 +700,7 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 				const uint32_t *ix = tri_ix(m, q);
 				g->tri[g->n_tri].mesh = g->n_mesh;
 				g->tri[g->n_tri].tri = q;
+				g->tri_flat[g->n_tri] = flat_axis(&m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]]);
 				if (push_triangle(&rb, REF_MAKE(REF_TRI, g->n_tri++), m->v[ix[0]], m->v[ix[1]], m->v[ix[2]]) < 0)
 					goto oom;
 			}

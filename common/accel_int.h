@@ -138,6 +138,9 @@ struct group {
 	struct gmesh *mesh;
 	uint32_t n_mesh;
 	struct gtri *tri;
+	uint8_t *tri_flat; /* per triangle: the axis whose coordinate its three
+			      vertices share, bit for bit, or 3 (FLAT TRIANGLES,
+			      accel_trace.h) */
 	uint32_t n_tri;
 	struct xprim *xp;
 	uint32_t n_xp;

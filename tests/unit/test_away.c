@@ -8,7 +8,8 @@
  * the coordinates, as shading offsets a ray's start, and by more), in every
  * direction, with tmin 0, tiny or negative and tmax infinite or finite, at
  * scales from 1e-3 to 1e3 and centres up to 1e3 away: the same hit or
- * miss, and the same t bit for bit.
+ * miss, and the same t bit for bit. And FLAT TRIANGLES (flat_triangles
+ * below).
  */
 #include <math.h>
 #include <stdio.h>
@@ -43,6 +44,58 @@ static void limits(double *tmin, double *tmax)
 	double u = uniform();
 	*tmin = u < 0.6 ? 0 : u < 0.8 ? 1e-12 : -1;
 	*tmax = uniform() < 0.5 ? INFINITY : 10 * uniform();
+}
+
+/*
+ * FLAT TRIANGLES (tri_flat_behind in common/accel_trace.h): a triangle
+ * whose vertices share the coordinate of one axis bit for bit, and rays
+ * from points on it (inside and beyond its edges), on its plane, 1e-9 off
+ * it either side (of the coordinates, as shading offsets them) or well
+ * away, steep and grazing: wherever tri_flat_behind says "no hit",
+ * geom_tri_hit_p says so too. Returns how often it said so.
+ */
+static long flat_triangles(long *bad, long *hits)
+{
+	uint8_t flat[1];
+	struct group g;
+	memset(&g, 0, sizeof g);
+	g.tri_flat = flat;
+	long behind_n = 0;
+	for (int i = 0; i < N_RAYS; i++) {
+		int ax = i % 3;
+		flat[0] = (uint8_t)ax;
+		double scale = pow(10, 6 * uniform() - 3);
+		vec3 c = v3_scale(unit(), uniform() < 0.5 ? 0 : 1e3 * uniform());
+		vec3 v[3];
+		for (int k = 0; k < 3; k++) {
+			v[k] = v3_add(c, v3_scale(unit(), scale));
+			double *q = ax == 0 ? &v[k].x : ax == 1 ? &v[k].y : &v[k].z;
+			*q = ax == 0 ? c.x : ax == 1 ? c.y : c.z; /* one plane, bit for bit */
+		}
+		double u = 1.4 * uniform() - 0.2, w = (1 - u) * (1.4 * uniform() - 0.2);
+		vec3 p = v3_add(v[0], v3_add(v3_scale(v3_sub(v[1], v[0]), u), v3_scale(v3_sub(v[2], v[0]), w)));
+		double m = fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z)));
+		double e = (int)(uniform() * 4) == 0 ? 0 : (uniform() < 0.5 ? -1 : 1) * 1e-9 * (1 + m) * (uniform() < 0.8 ? 1 : 1e3);
+		vec3 o = p;
+		double *oq = ax == 0 ? &o.x : ax == 1 ? &o.y : &o.z;
+		*oq += e;
+		vec3 d = unit();
+		if (uniform() < 0.5) { /* steep: the plane's axis the largest */
+			double *dq = ax == 0 ? &d.x : ax == 1 ? &d.y : &d.z;
+			*dq = (*dq < 0 ? -1 : 1) * (1 + 2 * uniform());
+		}
+		d = v3_scale(d, uniform() < 0.5 ? 1 : 3 * scale * uniform() + 1e-3);
+		double tmin, tmax, t, b1, b2;
+		limits(&tmin, &tmax);
+		struct geom_wray wr;
+		geom_wray_init(&wr, o, d);
+		bool behind = tri_flat_behind(&g, 0, &wr, &v[0], tmin);
+		bool hit = geom_tri_hit_p(&wr, &v[0], &v[1], &v[2], tmin, tmax, &t, &b1, &b2);
+		behind_n += behind;
+		*bad += behind && hit;
+		*hits += hit;
+	}
+	return behind_n;
 }
 
 int main(void)
@@ -85,5 +138,9 @@ int main(void)
 	/* the cases the early miss is for, and hits, are many */
 	CHECK(away_s > N_RAYS / 8 && hits_s > N_RAYS / 8);
 	CHECK(away_c > N_RAYS / 8 && hits_c > N_RAYS / 10);
+	long bad_f = 0, hits_f = 0, behind_f = flat_triangles(&bad_f, &hits_f);
+	printf("flat triangles: %ld hits, %ld behind, %ld behind yet hit\n", hits_f, behind_f, bad_f);
+	CHECK(bad_f == 0);
+	CHECK(behind_f > N_RAYS / 8 && hits_f > N_RAYS / 20);
 	TEST_MAIN_END();
 }
