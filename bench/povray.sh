@@ -7,9 +7,15 @@
 # angle-weighted vertex normals, as portray's `smooth`; same camera, lights
 # and finishes).
 #
-# Two modes, each at POV_W x POV_H (default 1280x960) on POV_THREADS threads
+# Three modes, each at POV_W x POV_H (default 1280x960) on POV_THREADS threads
 # (default 1; "1 2" for both):
 #   plain  one eye ray per pixel: ours `filter standard`, POV-Ray -A;
+#   deep   plain, with POV-Ray tracing as deep as portray: the twin's
+#          global_settings get max_trace_level 11 and adc_bailout 1/512
+#          (portray traces 10 bounces, LIM_TRACE_DEPTH, and no ray whose
+#          weight is below 1/512, SHADE_MIN_WEIGHT; POV-Ray's defaults, 5
+#          levels counting the eye ray and 1/255, stop sooner: on balls_s4
+#          876,515 mirror rays against portray's 961,245);
 #   ss3    a fixed 3x3 grid in every pixel: ours `filter super-sample
 #          x-samples 3 y-samples 3`, POV-Ray +AM1 +A0.0 +R3 (threshold 0:
 #          every pixel that differs at all from a neighbour, i.e. nearly
@@ -18,7 +24,10 @@
 # "Pixels" + "Samples" of its statistics) and printed per pixel; "ratio/ray"
 # divides each program's time by its own eye rays, so it is the ratio at
 # equal eye rays per pixel when the counts differ (POV-Ray traces about 10
-# per pixel in ss3: its first ray and the 9 of the grid).
+# per pixel in ss3: its first ray and the 9 of the grid). Secondary rays
+# (mirror and transmitted, every depth; shadow rays not counted) are
+# printed per pixel too: ours the summary's "secondary rays", POV-Ray's its
+# "Reflected", "Refracted" and "Transmitted Rays".
 #
 # Times are of the whole process (start-up, parsing, building, tracing and
 # writing the PNG), measured by /usr/bin/time: CPU time (user + system,
@@ -29,8 +38,8 @@
 # ratio = portray / POV-Ray (below 1: portray is faster). Targets of issue
 # 13: plain CPU ratio <= 0.20 and ss3 ratio/ray <= 0.33 at 1 thread.
 #
-# POV_SCENES="balls_s4 teapot" limits the scenes, POV_MODES=plain (or ss3) the
-# modes. Skips (exit 0) when povray,
+# POV_SCENES="balls_s4 teapot" limits the scenes, POV_MODES=plain (deep,
+# ss3) the modes (default "plain deep ss3"). Skips (exit 0) when povray,
 # /usr/bin/time or the shared data is missing. Nothing here is a test.
 SHARED=${PORTRAY_SHARED:-../shared/data}
 MASTER=${MASTER:-bin/portray-master}
@@ -38,7 +47,7 @@ W=${POV_W:-1280}
 H=${POV_H:-960}
 REPS=${POV_REPS:-2}
 THREADS=${POV_THREADS:-1}
-MODES=${POV_MODES:-plain ss3}
+MODES=${POV_MODES:-plain deep ss3}
 if ! command -v povray >/dev/null 2>&1; then
 	echo "povray not installed: skipped"
 	exit 0
@@ -158,17 +167,27 @@ mesh_twins() {
 	cat "$TMP/$1.body.pov" >>"$TMP/$1.pov"
 }
 
-# run_pov POVFILE THREADS MODE: "cpu wall eye_rays" of one POV-Ray run
+# run_pov POVFILE THREADS MODE: "cpu wall eye_rays secondary_rays" of one
+# POV-Ray run
 run_pov() {
 	aa=-A
 	[ "$3" = ss3 ] && aa="+AM1 +A0.0 +R3"
+	pov=$1
+	if [ "$3" = deep ]; then
+		pov=$TMP/deep.pov
+		{
+			echo "global_settings { max_trace_level 11 adc_bailout 1/512 }"
+			cat "$1"
+		} >"$pov"
+	fi
 	# shellcheck disable=SC2086 # $aa is several options
-	(cd "$TMP" && "$TIME" -f "TIME %U %S %e" povray "+I$1" "+O$TMP/pov.png" +FN "+W$W" "+H$H" -D $aa \
+	(cd "$TMP" && "$TIME" -f "TIME %U %S %e" povray "+I$pov" "+O$TMP/pov.png" +FN "+W$W" "+H$H" -D $aa \
 		"+WT$2" >"$TMP/pov.log" 2>&1)
-	awk '
+	tr '\r' '\n' <"$TMP/pov.log" | awk '
 	/^TIME/ { cpu = $2 + $3; wall = $4 }
 	/^Pixels:/ { rays = $2 + $4 }
-	END { if (cpu != "" && rays != "") print cpu, wall, rays }' "$TMP/pov.log"
+	/^(Reflected|Refracted|Transmitted) Rays:/ { sec += $3 }
+	END { if (cpu != "" && rays != "") print cpu, wall, rays, sec + 0 }'
 }
 
 # run_ours SCENE THREADS: the same for portray
@@ -176,8 +195,8 @@ run_ours() {
 	"$TIME" -f "TIME %U %S %e" "$MASTER" "$1" -o "$TMP/ours.png" -j "$2" --size "${W}x${H}" >"$TMP/ours.log" 2>&1
 	awk '
 	/^TIME/ { cpu = $2 + $3; wall = $4 }
-	/eye rays/ { for (i = 1; i < NF; i++) if ($(i + 1) == "eye") rays = $i }
-	END { if (cpu != "" && rays != "") print cpu, wall, rays }' "$TMP/ours.log"
+	/eye rays/ { for (i = 1; i < NF; i++) { if ($(i + 1) == "eye") rays = $i; if ($(i + 1) == "secondary") sec = $i } }
+	END { if (cpu != "" && rays != "") print cpu, wall, rays, sec + 0 }' "$TMP/ours.log"
 }
 
 # compare NAME SCENE POVFILE: every mode and thread count, interleaved
@@ -202,8 +221,8 @@ compare() {
 				rep=$((rep + 1))
 			done
 			echo "$best_o $best_p" | awk -v n="$1" -v t="$threads" -v m="$mode" -v px="$((W * H))" '{
-				printf "%-9s -j%d %-5s portray cpu %7.3f s wall %7.3f s %5.2f rays/px | povray cpu %7.3f s wall %7.3f s %5.2f rays/px | ratio cpu %.3f wall %.3f ratio/ray %.3f\n",
-					n, t, m, $1, $2, $3 / px, $4, $5, $6 / px, $1 / $4, $2 / $5, ($1 / $3) / ($4 / $6)
+				printf "%-9s -j%d %-5s portray cpu %7.3f s wall %7.3f s %5.2f rays/px %5.3f sec/px | povray cpu %7.3f s wall %7.3f s %5.2f rays/px %5.3f sec/px | ratio cpu %.3f wall %.3f ratio/ray %.3f\n",
+					n, t, m, $1, $2, $3 / px, $4 / px, $5, $6, $7 / px, $8 / px, $1 / $5, $2 / $6, ($1 / $3) / ($5 / $7)
 			}'
 		done
 	done

@@ -45,6 +45,7 @@ struct renderer {
 	struct filter_chain fc;
 	uint32_t w, h;
 	atomic_uint_fast64_t rays; /* eye rays traced, all threads */
+	atomic_uint_fast64_t secondary; /* mirror and transmitted rays, all threads */
 };
 
 int renderer_new(const struct scene *s, struct renderer **out, struct scene_error *err)
@@ -65,6 +66,7 @@ int renderer_new_cancellable(const struct scene *s, struct renderer **out, struc
 		return scene_errorf(err, ERRLEVEL_FATAL, "out of memory");
 	r->s = s;
 	atomic_init(&r->rays, 0);
+	atomic_init(&r->secondary, 0);
 	struct cancel_scope saved;
 	cancel_enter(cancel, &saved);
 	int rc = accel_build(s, &r->accel, err);
@@ -389,6 +391,7 @@ int renderer_tile_px(const struct renderer *r, struct tile_rect t, enum render_p
 	struct cancel_scope saved;
 	cancel_enter(cancel, &saved);
 	uint64_t rays = 0;
+	(void)shade_take_secondary(); /* this thread's count starts at the tile */
 	if (filter_single_ray(&r->fc))
 		tile_blocks(r, t, ps, rgb, &rays);
 	else
@@ -398,6 +401,7 @@ int renderer_tile_px(const struct renderer *r, struct tile_rect t, enum render_p
 	/* the counter is statistics only: casting away const is safe, r was
 	 * allocated non-const by renderer_new */
 	atomic_fetch_add_explicit(&((struct renderer *)r)->rays, rays, memory_order_relaxed);
+	atomic_fetch_add_explicit(&((struct renderer *)r)->secondary, shade_take_secondary(), memory_order_relaxed);
 	return complete;
 }
 
@@ -414,6 +418,11 @@ void renderer_tile(const struct renderer *r, struct tile_rect t, uint8_t *rgb)
 uint64_t renderer_rays(const struct renderer *r)
 {
 	return atomic_load_explicit(&r->rays, memory_order_relaxed);
+}
+
+uint64_t renderer_secondary_rays(const struct renderer *r)
+{
+	return atomic_load_explicit(&r->secondary, memory_order_relaxed);
 }
 
 int renderer_warnings(const struct renderer *r, char *buf, size_t n)

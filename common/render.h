@@ -94,6 +94,9 @@ int renderer_tile_px(const struct renderer *r, struct tile_rect t, enum render_p
 
 /* Eye rays traced by this renderer so far, over all threads (for Mrays/s). */
 uint64_t renderer_rays(const struct renderer *r);
+/* Mirror and transmitted rays traced by this renderer so far, at every
+ * depth, over all threads (shadow rays not counted; shade_take_secondary). */
+uint64_t renderer_secondary_rays(const struct renderer *r);
 /* Number of filters ignored and their warnings (see filter_warnings): the
  * master prints them once. buf is NUL-terminated, truncated to n. */
 int renderer_warnings(const struct renderer *r, char *buf, size_t n);

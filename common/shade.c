@@ -106,6 +106,8 @@ struct shade_obj_hint {
 	uint32_t ref;
 };
 static _Thread_local struct shade_hint hints[SHADE_HINTS];
+/* secondary rays traced by this thread (shade_take_secondary) */
+static _Thread_local uint64_t n_secondary;
 static _Thread_local struct shade_obj_hint obj_hints[SHADE_OBJ_HINTS];
 
 /* The calling thread's hint for light i of c from a hit on object obj
@@ -923,10 +925,14 @@ static vec3 surf_shade(const struct shade_ctx *c, const struct ray *r, const str
 	struct ray sr;
 	double w;
 	vec3 k;
-	if (reflect_ray(c, r, sf, weight, &sr, &w, &k))
+	if (reflect_ray(c, r, sf, weight, &sr, &w, &k)) {
+		n_secondary++;
 		col = v3_add(col, v3_mul(k, trace(c, &sr, depth + 1, w, rng_derive(seed, TAG_REFLECT))));
-	if (refract_ray(c, r, sf, weight, &sr, &w, &k))
+	}
+	if (refract_ray(c, r, sf, weight, &sr, &w, &k)) {
+		n_secondary++;
 		col = v3_add(col, v3_mul(k, trace(c, &sr, depth + 1, w, rng_derive(seed, TAG_REFRACT))));
+	}
 	return col;
 }
 
@@ -1292,6 +1298,7 @@ static inline void block_secondary(const struct shade_ctx *c, const struct ray r
 	}
 	if (!m)
 		return;
+	n_secondary += (uint64_t)m;
 	vec3 col[4];
 	block_trace(c, sr, m, depth + 1, w, ss, col);
 	for (int j = 0; j < m; j++)
@@ -1389,4 +1396,11 @@ vec3 shade_trace(const struct shade_ctx *c, const struct ray *r, uint64_t seed)
 	if (!shade_eye_ray(r, &u))
 		return v3(0, 0, 0);
 	return trace(c, &u, 0, 1.0, seed);
+}
+
+uint64_t shade_take_secondary(void)
+{
+	uint64_t n = n_secondary;
+	n_secondary = 0;
+	return n;
 }

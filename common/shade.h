@@ -51,4 +51,12 @@ vec3 shade_eye_hit(const struct shade_ctx *c, const struct ray *u, const struct 
 void shade_eye_hit4(const struct shade_ctx *c, const struct ray u[4], const struct hit *h[4],
 		    const uint64_t seed[4], int n, vec3 out[4]);
 
+/*
+ * The secondary rays (mirror and transmitted rays, at every depth) the
+ * calling thread has traced since its last call: statistics for the
+ * render summary and bench/povray.sh's like-for-like counts. Shadow rays
+ * are not counted.
+ */
+uint64_t shade_take_secondary(void);
+
 #endif

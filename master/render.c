@@ -471,10 +471,10 @@ int master_render(const struct master_opts *o)
 			snprintf(size, sizeof size, "%ux%u", w, h);
 		fprintf(stderr,
 			"portray-master: %s: %s, %d thread%s, %llu tiles, %.3f s (parse %.3f, build %.3f, "
-			"trace %.3f), %llu eye rays, %.2f Mrays/s\n",
+			"trace %.3f), %llu eye rays, %llu secondary rays, %.2f Mrays/s\n",
 			shown(out), size, threads, threads == 1 ? "" : "s", (unsigned long long)total,
 			t_render - t0, t_parse - t0, t_build - t_parse, tr, (unsigned long long)rays,
-			tr > 0 ? rays / tr * 1e-6 : 0.0);
+			(unsigned long long)renderer_secondary_rays(r), tr > 0 ? rays / tr * 1e-6 : 0.0);
 	}
 	if (journal_left)
 		say_journal(out);

@@ -17,6 +17,9 @@ static void add_filter(struct scene_camera *c, enum filter_kind k)
 
 /* A few spheres over a plane, lit by a sphere light (random samples) and a
  * point light; camera filters as given. */
+/* make_scene's red material's reflection and transparency (0: neither) */
+static double red_reflection, red_transparency;
+
 static struct scene *make_scene(const struct scene_camera *cam, int with_objects)
 {
 	struct scene_error err;
@@ -46,6 +49,8 @@ static struct scene *make_scene(const struct scene_camera *cam, int with_objects
 	scene_material_defaults(&m);
 	m.diff_colour = v3(0.9, 0.3, 0.2);
 	m.specular = 0.5;
+	m.reflection = red_reflection;
+	m.transparency = red_transparency;
 	uint32_t red;
 	CHECK(scene_add_material(s, &m, &red, &err) == 0);
 	for (int i = 0; i < 4; i++) {
@@ -62,6 +67,8 @@ static struct scene *make_scene(const struct scene_camera *cam, int with_objects
 	uint32_t id;
 	scene_object_defaults(&o, PRIM_PLANE);
 	o.u.plane.position = v3(0, -1, 0);
+	if (red_reflection > 0 || red_transparency > 0) /* a flat mirror: BLOCK SHADING's packets */
+		o.material = red;
 	CHECK(scene_add_object(s, &o, &id, &err) == 0);
 	CHECK(scene_add_root(s, id, &err) == 0);
 	return s;
@@ -315,6 +322,37 @@ int main(void)
 		renderer_free(r);
 		scene_free(s);
 	}
+	/* secondary rays (renderer_secondary_rays): none without mirrors or
+	 * glass; with them, the same count whatever the threads and tiles, and
+	 * the same through the packets and blocks (standard) as through single
+	 * rays (super-sample 1x1), opaque (surf_shade) and transparent
+	 * (BLOCK SHADING) */
+	for (int k = 0; k < 3; k++) {
+		red_reflection = k ? 0.5 : 0;
+		red_transparency = k == 2 ? 0.6 : 0;
+		uint64_t cnt[2];
+		for (int v = 0; v < 2; v++) {
+			c = base_camera();
+			add_filter(&c, FILTER_STANDARD);
+			if (v) {
+				add_filter(&c, FILTER_SUPERSAMPLE);
+				c.filters[1].x_samples = c.filters[1].y_samples = 1;
+			}
+			s = make_scene(&c, 1);
+			CHECK(renderer_new(s, &r, &err) == 0);
+			free(render(r, 1, 16));
+			cnt[v] = renderer_secondary_rays(r);
+			free(render(r, 2, 5));
+			CHECK(renderer_secondary_rays(r) == 2 * cnt[v]);
+			renderer_free(r);
+			scene_free(s);
+		}
+		CHECK(cnt[0] == cnt[1]);
+		CHECK(k ? cnt[0] > 0 : cnt[0] == 0);
+		if (k == 2) /* glass adds transmitted rays to the mirror rays */
+			CHECK(cnt[0] > W * H / 8);
+	}
+	red_reflection = red_transparency = 0;
 	CHECK(render_ncpus() >= 1);
 	CHECK(render_tile_count(64, 64, 32) == 4 && render_tile_count(65, 64, 32) == 6);
 	TEST_MAIN_END();
