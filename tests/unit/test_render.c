@@ -87,6 +87,20 @@ static struct scene_camera base_camera(void)
 	return c;
 }
 
+/* base_camera with filter standard: the eye rays in packets and 2x2
+ * shading blocks; single: with super-sample 1x1 after it, the same image
+ * traced one ray at a time (filter_pixel) */
+static struct scene_camera packets_or_single(int single)
+{
+	struct scene_camera c = base_camera();
+	add_filter(&c, FILTER_STANDARD);
+	if (single) {
+		add_filter(&c, FILTER_SUPERSAMPLE);
+		c.filters[1].x_samples = c.filters[1].y_samples = 1;
+	}
+	return c;
+}
+
 static uint64_t calls;
 static uint64_t last_done;
 static void count_progress(void *arg, uint64_t done, uint64_t total)
@@ -279,12 +293,7 @@ int main(void)
 	for (int k = 0; k < 2; k++) {
 		uint8_t *img[2];
 		for (int v = 0; v < 2; v++) {
-			c = base_camera();
-			add_filter(&c, FILTER_STANDARD);
-			if (v) {
-				add_filter(&c, FILTER_SUPERSAMPLE);
-				c.filters[1].x_samples = c.filters[1].y_samples = 1;
-			}
+			c = packets_or_single(v);
 			s = make_scene(&c, 1);
 			for (int i = 0; i < 40 * k; i++) {
 				struct scene_light l;
@@ -332,12 +341,7 @@ int main(void)
 		red_transparency = k == 2 ? 0.6 : 0;
 		uint64_t cnt[2];
 		for (int v = 0; v < 2; v++) {
-			c = base_camera();
-			add_filter(&c, FILTER_STANDARD);
-			if (v) {
-				add_filter(&c, FILTER_SUPERSAMPLE);
-				c.filters[1].x_samples = c.filters[1].y_samples = 1;
-			}
+			c = packets_or_single(v);
 			s = make_scene(&c, 1);
 			CHECK(renderer_new(s, &r, &err) == 0);
 			free(render(r, 1, 16));
