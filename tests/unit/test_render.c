@@ -101,6 +101,38 @@ static struct scene_camera packets_or_single(int single)
 	return c;
 }
 
+/* A scene of mirrors (reflection 1, white spec-colour: every mirror ray
+ * keeps weight 1) across base_camera's view: one plane through the origin
+ * facing the camera, and with facing, a second one parallel to it behind
+ * the camera. Every eye ray meets the first; its mirror ray goes back to
+ * the sky (one secondary ray a pixel) or, with facing, between the two
+ * until LIM_TRACE_DEPTH (that many a pixel). */
+static struct scene *mirror_scene(const struct scene_camera *cam, int facing)
+{
+	struct scene_error err;
+	struct scene *s = make_scene(cam, 0);
+	struct scene_light l;
+	scene_light_defaults(&l);
+	l.position = v3(1, 3, 5);
+	CHECK(scene_add_light(s, &l, &err) == 0);
+	struct scene_material m;
+	scene_material_defaults(&m);
+	m.reflection = 1;
+	uint32_t mirror;
+	CHECK(scene_add_material(s, &m, &mirror, &err) == 0);
+	for (int k = 0; k <= facing; k++) {
+		struct scene_object o;
+		uint32_t id;
+		scene_object_defaults(&o, PRIM_PLANE);
+		o.u.plane.normal = v3(0, 2, 9); /* toward the camera at (0 2 9) */
+		o.u.plane.position = k ? v3(0, 4, 18) : v3(0, 0, 0);
+		o.material = mirror;
+		CHECK(scene_add_object(s, &o, &id, &err) == 0);
+		CHECK(scene_add_root(s, id, &err) == 0);
+	}
+	return s;
+}
+
 static uint64_t calls;
 static uint64_t last_done;
 static void count_progress(void *arg, uint64_t done, uint64_t total)
@@ -357,6 +389,18 @@ int main(void)
 			CHECK(cnt[0] > W * H / 8);
 	}
 	red_reflection = red_transparency = 0;
+	/* exact counts: one mirror ray a pixel off one mirror, LIM_TRACE_DEPTH
+	 * between two facing ones, through packets and single rays alike */
+	for (int facing = 0; facing < 2; facing++)
+		for (int v = 0; v < 2; v++) {
+			c = packets_or_single(v);
+			s = mirror_scene(&c, facing);
+			CHECK(renderer_new(s, &r, &err) == 0);
+			free(render(r, 2, 16));
+			CHECK(renderer_secondary_rays(r) == (uint64_t)W * H * (facing ? LIM_TRACE_DEPTH : 1));
+			renderer_free(r);
+			scene_free(s);
+		}
 	CHECK(render_ncpus() >= 1);
 	CHECK(render_tile_count(64, 64, 32) == 4 && render_tile_count(65, 64, 32) == 6);
 	TEST_MAIN_END();
