@@ -188,9 +188,9 @@ run_pov() {
 	tr '\r' '\n' <"$TMP/pov.log" | awk '
 	/^TIME/ { cpu = $2 + $3; wall = $4 }
 	/^Pixels:/ { rays = $2 + $4 }
-	/^Rays:/ { saved = $4; split($7, lv, "/"); deep = lv[1] == lv[2] ? "+" : "" }
+	/^Rays:/ { saved = $4; split($7, lv, "/"); cut = lv[1] == lv[2] ? "+" : "" }
 	/^(Reflected|Refracted|Transmitted) Rays:/ { sec += $3 }
-	END { if (cpu != "" && rays != "") print cpu, wall, rays, sec - saved, deep }'
+	END { if (cpu != "" && rays != "") print cpu, wall, rays, sec - saved, cut }'
 }
 
 # run_ours SCENE THREADS: the same for portray

@@ -16,11 +16,11 @@ static void add_filter(struct scene_camera *c, enum filter_kind k)
 }
 
 /* A few spheres over a plane, lit by a sphere light (random samples) and a
- * point light; camera filters as given. */
-/* make_scene's red material's reflection and transparency (0: neither) */
-static double red_reflection, red_transparency;
-
-static struct scene *make_scene(const struct scene_camera *cam, int with_objects)
+ * point light; camera filters as given. Half the spheres are red, with
+ * the given reflection and transparency; when either is above 0 the plane
+ * is red too (a flat mirror or pane: BLOCK SHADING's packets). */
+static struct scene *make_scene_red(const struct scene_camera *cam, int with_objects, double red_reflection,
+				    double red_transparency)
 {
 	struct scene_error err;
 	struct scene *s = scene_new();
@@ -67,11 +67,17 @@ static struct scene *make_scene(const struct scene_camera *cam, int with_objects
 	uint32_t id;
 	scene_object_defaults(&o, PRIM_PLANE);
 	o.u.plane.position = v3(0, -1, 0);
-	if (red_reflection > 0 || red_transparency > 0) /* a flat mirror: BLOCK SHADING's packets */
+	if (red_reflection > 0 || red_transparency > 0)
 		o.material = red;
 	CHECK(scene_add_object(s, &o, &id, &err) == 0);
 	CHECK(scene_add_root(s, id, &err) == 0);
 	return s;
+}
+
+/* make_scene_red with a plain red (neither mirror nor glass). */
+static struct scene *make_scene(const struct scene_camera *cam, int with_objects)
+{
+	return make_scene_red(cam, with_objects, 0, 0);
 }
 
 static struct scene_camera base_camera(void)
@@ -369,12 +375,10 @@ int main(void)
 	 * rays (super-sample 1x1), opaque (surf_shade) and transparent
 	 * (BLOCK SHADING) */
 	for (int k = 0; k < 3; k++) {
-		red_reflection = k ? 0.5 : 0;
-		red_transparency = k == 2 ? 0.6 : 0;
 		uint64_t cnt[2];
 		for (int v = 0; v < 2; v++) {
 			c = packets_or_single(v);
-			s = make_scene(&c, 1);
+			s = make_scene_red(&c, 1, k ? 0.5 : 0, k == 2 ? 0.6 : 0);
 			CHECK(renderer_new(s, &r, &err) == 0);
 			free(render(r, 1, 16));
 			cnt[v] = renderer_secondary_rays(r);
@@ -388,7 +392,6 @@ int main(void)
 		if (k == 2) /* glass adds transmitted rays to the mirror rays */
 			CHECK(cnt[0] > W * H / 8);
 	}
-	red_reflection = red_transparency = 0;
 	/* exact counts: one mirror ray a pixel off one mirror, LIM_TRACE_DEPTH
 	 * between two facing ones, through packets and single rays alike */
 	for (int facing = 0; facing < 2; facing++)
