@@ -1,0 +1,208 @@
+/*
+ * bench_secondary.c - the figure for single incoherent rays: the mirror
+ * rays of a frame, traced one at a time with accel_intersect (closest hit,
+ * no shading), as the renderer traces the reflections off curved surfaces
+ * (docs/performance.md, round 16).
+ *
+ * The rays are made as the renderer makes them: every pixel centre's eye
+ * hit whose material reflects sends a ray reflected about the shading
+ * normal facing the viewer, from accel_offset_point, and so on from its
+ * hit while the weight (the product of spec-colour x reflection maxima)
+ * stays at 1/512 or more, down to LIM_TRACE_DEPTH bounces. Shaders, which
+ * may perturb the normal or the material, are left out. The rays are made
+ * once, then traced in three orders, FRAMES times each, interleaved:
+ *   - "first": the first bounces alone, in pixel order;
+ *   - "all": every bounce in the order made (a pixel's chain, then the
+ *     next pixel's), as the renderer traces them;
+ *   - "shuffled": the same rays in a fixed pseudo-random order (what
+ *     tracing them with nothing in common between neighbours costs).
+ * It prints each order's best rate in Mrays/s of thread CPU time, and a
+ * hash of the hits of "all" and "shuffled", which must agree.
+ *
+ *   bench_secondary [SCENE [FRAMES [WIDTHxHEIGHT]]]
+ *
+ * Defaults: tests/data/spd/balls_s4.sce, 5 frames, 1280x960. Not a test:
+ * prints figures only.
+ */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/accel.h"
+#include "common/camera.h"
+#include "common/limits.h"
+#include "bench/bench_scene.h"
+
+#define MIN_WEIGHT (1.0 / 512.0) /* shade.c's SHADE_MIN_WEIGHT */
+
+struct set {
+	struct ray *r;
+	size_t n, cap;
+};
+
+static int push(struct set *s, const struct ray *r)
+{
+	if (s->n == s->cap) {
+		size_t cap = s->cap ? 2 * s->cap : 65536;
+		struct ray *nr = realloc(s->r, cap * sizeof *nr);
+		if (!nr)
+			return -1;
+		s->r = nr;
+		s->cap = cap;
+	}
+	s->r[s->n++] = *r;
+	return 0;
+}
+
+static double maxc(vec3 v) { return v.x > v.y ? (v.x > v.z ? v.x : v.z) : (v.y > v.z ? v.y : v.z); }
+
+/* The mirror ray off hit h of ray r, when h's material reflects with the
+ * weight kept at MIN_WEIGHT or more; *w is updated. */
+static bool mirror(const struct scene *sc, const struct ray *r, const struct hit *h, double *w, struct ray *out)
+{
+	if (h->material == SCENE_NONE || h->material >= sc->n_materials)
+		return false;
+	const struct scene_material *m = &sc->materials[h->material];
+	if (!(m->reflection > 0))
+		return false;
+	*w *= maxc(v3_scale(m->spec_colour, m->reflection));
+	if (!(*w >= MIN_WEIGHT))
+		return false;
+	vec3 ng = h->ng, n = h->n;
+	if (v3_dot(ng, r->d) > 0) { /* facing the viewer */
+		ng = v3_neg(ng);
+		n = v3_neg(n);
+	}
+	vec3 rd = v3_sub(r->d, v3_scale(n, 2 * v3_dot(r->d, n)));
+	if (v3_dot(rd, ng) <= 0)
+		rd = v3_sub(r->d, v3_scale(ng, 2 * v3_dot(r->d, ng)));
+	*out = (struct ray){ accel_offset_point(h->p, ng, rd), rd, 0, INFINITY };
+	return true;
+}
+
+/* Every pixel's chain of mirror rays into all (in the order made), the
+ * first bounces alone into first. */
+static int make_rays(const struct scene *sc, const struct accel *a, const struct cam *c, struct set *all,
+		     struct set *first)
+{
+	for (uint32_t y = 0; y < c->h; y++)
+		for (uint32_t x = 0; x < c->w; x++) {
+			struct ray r = cam_ray(c, x + 0.5, y + 0.5), m;
+			struct hit h;
+			double w = 1;
+			for (int depth = 0; depth < LIM_TRACE_DEPTH; depth++) {
+				if (!accel_intersect(a, &r, &h) || !mirror(sc, &r, &h, &w, &m))
+					break;
+				if (push(all, &m) || (depth == 0 && push(first, &m)))
+					return -1;
+				r = m;
+			}
+		}
+	return 0;
+}
+
+static uint64_t fnv(uint64_t h, const void *p, size_t n)
+{
+	const unsigned char *c = p;
+	for (size_t i = 0; i < n; i++) {
+		h ^= c[i];
+		h *= 1099511628211ull;
+	}
+	return h;
+}
+
+/* Traces the rays of s; with hits not NULL, returns a hash of the hits
+ * (a sum of per-ray hashes keyed by id[i], the ray's index as made, so
+ * that any order gives the same) and counts them into *hits. */
+static uint64_t pass(const struct accel *a, const struct set *s, const uint32_t *id, uint64_t *hits)
+{
+	uint64_t h64 = 0, nh = 0;
+	for (size_t i = 0; i < s->n; i++) {
+		struct hit h;
+		if (accel_intersect(a, &s->r[i], &h) && hits) {
+			nh++;
+			uint32_t k = id ? id[i] : (uint32_t)i;
+			uint64_t e = fnv(1469598103934665603ull, &k, sizeof k);
+			e = fnv(e, &h.t, sizeof h.t);
+			e = fnv(e, &h.object, sizeof h.object);
+			h64 += fnv(e, &h.n, sizeof h.n);
+		}
+	}
+	if (hits)
+		*hits = nh;
+	return h64;
+}
+
+int main(int argc, char **argv)
+{
+	const char *path;
+	int frames;
+	unsigned w, h;
+	if (bs_args(argc, argv, 5, &path, &frames, &w, &h)) {
+		fprintf(stderr, "usage: bench_secondary [SCENE [FRAMES [WIDTHxHEIGHT]]]\n");
+		return 64;
+	}
+	struct scene *sc;
+	struct accel *a;
+	if (bs_load(path, &sc, &a))
+		return 1;
+	struct cam c;
+	struct set all = { 0 }, first = { 0 };
+	if (cam_init(&c, &sc->camera, w, h) < 0 || make_rays(sc, a, &c, &all, &first)) {
+		printf("%s: degenerate camera or out of memory\n", path);
+		return 1;
+	}
+	if (all.n == 0 || all.n > UINT32_MAX) {
+		printf("%s %ux%u: no mirror rays (no reflective material seen)\n", path, w, h);
+		free(all.r);
+		accel_free(a);
+		scene_free(sc);
+		return 0;
+	}
+	/* the shuffled copy: a fixed pseudo-random order (xorshift64), its
+	 * rays stored in that order so that reading them costs what it costs
+	 * in the others */
+	uint32_t *perm = malloc(all.n * sizeof *perm);
+	struct set shuf = { malloc(all.n * sizeof *shuf.r), all.n, all.n };
+	if (!perm || !shuf.r)
+		return 1;
+	uint64_t x = 88172645463325252ull;
+	for (size_t i = 0; i < all.n; i++)
+		perm[i] = (uint32_t)i;
+	for (size_t i = all.n - 1; i > 0; i--) {
+		x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+		size_t j = (size_t)(x % (i + 1));
+		uint32_t t = perm[i];
+		perm[i] = perm[j];
+		perm[j] = t;
+	}
+	for (size_t i = 0; i < all.n; i++)
+		shuf.r[i] = all.r[perm[i]];
+	uint64_t hits, shits;
+	uint64_t h_all = pass(a, &all, NULL, &hits), h_shuf = pass(a, &shuf, perm, &shits);
+	const struct set *sets[3] = { &first, &all, &shuf };
+	static const char *names[3] = { "first", "all", "shuffled" };
+	double best[3] = { 1e300, 1e300, 1e300 };
+	for (int f = 0; f < frames; f++) /* interleaved, so a load change hits all three */
+		for (int k = 0; k < 3; k++) {
+			double t0 = bs_cpu_now();
+			pass(a, sets[k], NULL, NULL);
+			double t = bs_cpu_now() - t0;
+			best[k] = t < best[k] ? t : best[k];
+		}
+	printf("%s %ux%u: %zu mirror rays (%.3f per pixel; %zu first bounces), %llu hit; best of %d, thread CPU time:\n",
+	       path, w, h, all.n, (double)all.n / ((double)w * h), first.n, (unsigned long long)hits, frames);
+	for (int k = 0; k < 3; k++)
+		printf("  %-8s %6.2f Mrays/s (%.1f ns a ray)\n", names[k], (double)sets[k]->n / best[k] * 1e-6,
+		       best[k] / (double)sets[k]->n * 1e9);
+	printf("  hits hash %016llx, shuffled %016llx%s\n", (unsigned long long)h_all, (unsigned long long)h_shuf,
+	       h_all == h_shuf && hits == shits ? "" : " MISMATCH");
+	free(perm);
+	free(shuf.r);
+	free(all.r);
+	free(first.r);
+	accel_free(a);
+	scene_free(sc);
+	return h_all == h_shuf && hits == shits ? 0 : 1;
+}
