@@ -30,27 +30,6 @@
 #include "common/filter.h"
 #include "bench/bench_scene.h"
 
-/* FNV-1a over n bytes. */
-static uint64_t fnv(uint64_t h, const void *p, size_t n)
-{
-	const unsigned char *c = p;
-	for (size_t i = 0; i < n; i++) {
-		h ^= c[i];
-		h *= 1099511628211ull;
-	}
-	return h;
-}
-
-static uint64_t hash_hit(uint64_t h64, bool hit, const struct hit *h)
-{
-	if (!hit)
-		return fnv(h64, "-", 1);
-	h64 = fnv(h64, &h->t, sizeof h->t);
-	h64 = fnv(h64, &h->object, sizeof h->object);
-	h64 = fnv(h64, &h->n, sizeof h->n);
-	return fnv(h64, &h->ng, sizeof h->ng);
-}
-
 /* One frame of single rays; the hash of its hits (row by row) when hash is
  * not NULL. */
 static void frame_single(const struct accel *a, const struct cam *c, uint64_t *hash)
@@ -62,7 +41,7 @@ static void frame_single(const struct accel *a, const struct cam *c, uint64_t *h
 			struct hit h;
 			bool hit = accel_intersect(a, &r, &h);
 			if (hash)
-				h64 = hash_hit(h64, hit, &h);
+				h64 = bs_hash_hit(h64, hit, &h);
 		}
 	if (hash)
 		*hash = h64;
@@ -103,7 +82,7 @@ static void frame_packets(const struct accel *a, const struct cam *c, const stru
 			continue;
 		for (uint32_t j = 0; j < 2 && y + j < c->h; j++)
 			for (uint32_t x = 0; x < c->w; x++)
-				h64 = hash_hit(h64, hit2[(size_t)j * c->w + x], &row2[(size_t)j * c->w + x]);
+				h64 = bs_hash_hit(h64, hit2[(size_t)j * c->w + x], &row2[(size_t)j * c->w + x]);
 	}
 	if (hash)
 		*hash = h64;
@@ -147,7 +126,7 @@ static void frame_big(const struct accel *a, const struct cam *c, const struct f
 		if (!hash)
 			continue;
 		for (size_t k = 0; k < side * (size_t)c->w; k++)
-			h64 = hash_hit(h64, hits[k], &rows[k]);
+			h64 = bs_hash_hit(h64, hits[k], &rows[k]);
 	}
 	if (hash)
 		*hash = h64;
@@ -167,24 +146,17 @@ int main(int argc, char **argv)
 		argc--;
 		argv++;
 	}
-	const char *path;
-	int frames;
-	unsigned w, h;
-	if (bs_args(argc, argv, 15, &path, &frames, &w, &h)) {
-		fprintf(stderr, "usage: bench_primary [--single | --4x4 | --2x2] [SCENE [FRAMES [WIDTHxHEIGHT]]]\n");
-		return 64;
-	}
-	struct scene *s;
-	struct accel *a;
-	if (bs_load(path, &s, &a))
-		return 1;
-	struct cam c;
-	if (cam_init(&c, &s->camera, w, h) < 0) {
-		printf("%s: degenerate camera\n", path);
-		accel_free(a);
-		scene_free(s);
-		return 1;
-	}
+	struct bs_bench b;
+	int rc = bs_start(argc, argv, 15, "bench_primary [--single | --4x4 | --2x2] [SCENE [FRAMES [WIDTHxHEIGHT]]]",
+			  &b);
+	if (rc)
+		return rc;
+	const char *path = b.path;
+	int frames = b.frames;
+	unsigned w = b.w, h = b.h;
+	struct scene *s = b.s;
+	struct accel *a = b.a;
+	struct cam c = b.c;
 	/* the renderer's eye rays when it makes them by filter_eye_block */
 	struct filter_chain *fc = malloc(sizeof *fc);
 	if (fc && (filter_chain_init(fc, &s->camera, &s->image, w, h) < 0 || !filter_single_ray(fc))) {

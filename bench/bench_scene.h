@@ -62,6 +62,75 @@ static inline int bs_load(const char *path, struct scene **s, struct accel **a)
 	return 0;
 }
 
+/* What an A/B benchmark starts from (bs_start). */
+struct bs_bench {
+	const char *path; /* the scene file */
+	int frames;
+	unsigned w, h;
+	struct scene *s;
+	struct accel *a;
+	struct cam c; /* the camera at w x h */
+};
+
+/* The A/B benchmarks' start, [SCENE [FRAMES [WIDTHxHEIGHT]]] (bs_args),
+ * the scene and its tree (bs_load) and the camera into *b. Returns 0, or
+ * the status to exit with: 64 after printing usage (the rest of a "usage: "
+ * line) on a bad argument, 1 when the scene or the camera fails (said on
+ * stdout, nothing left allocated). */
+static inline int bs_start(int argc, char **argv, int def_frames, const char *usage, struct bs_bench *b)
+{
+	if (bs_args(argc, argv, def_frames, &b->path, &b->frames, &b->w, &b->h)) {
+		fprintf(stderr, "usage: %s\n", usage);
+		return 64;
+	}
+	if (bs_load(b->path, &b->s, &b->a))
+		return 1;
+	if (cam_init(&b->c, &b->s->camera, b->w, b->h) < 0) {
+		printf("%s: degenerate camera\n", b->path);
+		accel_free(b->a);
+		scene_free(b->s);
+		return 1;
+	}
+	return 0;
+}
+
+/* Room for element n of the growable array p of *cap elements of elem
+ * bytes (the capacity doubles, from first): p, or the array moved, or NULL
+ * when out of memory (p is then still the caller's). */
+static inline void *bs_grow(void *p, size_t *cap, size_t n, size_t elem, size_t first)
+{
+	if (n < *cap)
+		return p;
+	size_t c = *cap ? 2 * *cap : first;
+	void *np = realloc(p, c * elem);
+	if (np)
+		*cap = c;
+	return np;
+}
+
+/* FNV-1a over n bytes, from h (1469598103934665603 to start). */
+static inline uint64_t bs_fnv(uint64_t h, const void *p, size_t n)
+{
+	const unsigned char *b = p;
+	for (size_t i = 0; i < n; i++) {
+		h ^= b[i];
+		h *= 1099511628211ull;
+	}
+	return h;
+}
+
+/* h64 extended by one query's answer: "-" for no hit, else the hit's t,
+ * object and normals (what shows whether a change kept a hit bit for bit). */
+static inline uint64_t bs_hash_hit(uint64_t h64, bool hit, const struct hit *h)
+{
+	if (!hit)
+		return bs_fnv(h64, "-", 1);
+	h64 = bs_fnv(h64, &h->t, sizeof h->t);
+	h64 = bs_fnv(h64, &h->object, sizeof h->object);
+	h64 = bs_fnv(h64, &h->n, sizeof h->n);
+	return bs_fnv(h64, &h->ng, sizeof h->ng);
+}
+
 /* The camera rays of the 2x2 pixel block at (x, y) into r, as the renderer
  * makes them (a block past the image's edge repeats its last row or
  * column), traced by one accel_intersect4 into h and hit. */

@@ -43,14 +43,10 @@ struct set {
 
 static int push(struct set *s, const struct ray *r)
 {
-	if (s->n == s->cap) {
-		size_t cap = s->cap ? 2 * s->cap : 65536;
-		struct ray *nr = realloc(s->r, cap * sizeof *nr);
-		if (!nr)
-			return -1;
-		s->r = nr;
-		s->cap = cap;
-	}
+	struct ray *nr = bs_grow(s->r, &s->cap, s->n, sizeof *nr, 65536);
+	if (!nr)
+		return -1;
+	s->r = nr;
 	s->r[s->n++] = *r;
 	return 0;
 }
@@ -102,16 +98,6 @@ static int make_rays(const struct scene *sc, const struct accel *a, const struct
 	return 0;
 }
 
-static uint64_t fnv(uint64_t h, const void *p, size_t n)
-{
-	const unsigned char *c = p;
-	for (size_t i = 0; i < n; i++) {
-		h ^= c[i];
-		h *= 1099511628211ull;
-	}
-	return h;
-}
-
 /* Traces the rays of s; with hits not NULL, returns a hash of the hits
  * (a sum of per-ray hashes keyed by id[i], the ray's index as made, so
  * that any order gives the same) and counts them into *hits. */
@@ -123,10 +109,7 @@ static uint64_t pass(const struct accel *a, const struct set *s, const uint32_t 
 		if (accel_intersect(a, &s->r[i], &h) && hits) {
 			nh++;
 			uint32_t k = id ? id[i] : (uint32_t)i;
-			uint64_t e = fnv(1469598103934665603ull, &k, sizeof k);
-			e = fnv(e, &h.t, sizeof h.t);
-			e = fnv(e, &h.object, sizeof h.object);
-			h64 += fnv(e, &h.n, sizeof h.n);
+			h64 += bs_hash_hit(bs_fnv(1469598103934665603ull, &k, sizeof k), true, &h);
 		}
 	}
 	if (hits)
@@ -136,28 +119,20 @@ static uint64_t pass(const struct accel *a, const struct set *s, const uint32_t 
 
 int main(int argc, char **argv)
 {
-	const char *path;
-	int frames;
-	unsigned w, h;
-	if (bs_args(argc, argv, 5, &path, &frames, &w, &h)) {
-		fprintf(stderr, "usage: bench_secondary [SCENE [FRAMES [WIDTHxHEIGHT]]]\n");
-		return 64;
-	}
-	struct scene *sc;
-	struct accel *a;
-	if (bs_load(path, &sc, &a))
-		return 1;
-	struct cam c;
+	struct bs_bench b;
+	int rc = bs_start(argc, argv, 5, "bench_secondary [SCENE [FRAMES [WIDTHxHEIGHT]]]", &b);
+	if (rc)
+		return rc;
 	struct set all = { 0 }, first = { 0 };
-	if (cam_init(&c, &sc->camera, w, h) < 0 || make_rays(sc, a, &c, &all, &first)) {
-		printf("%s: degenerate camera or out of memory\n", path);
+	if (make_rays(b.s, b.a, &b.c, &all, &first)) {
+		printf("%s: out of memory\n", b.path);
 		return 1;
 	}
 	if (all.n == 0 || all.n > UINT32_MAX) {
-		printf("%s %ux%u: no mirror rays (no reflective material seen)\n", path, w, h);
+		printf("%s %ux%u: no mirror rays (no reflective material seen)\n", b.path, b.w, b.h);
 		free(all.r);
-		accel_free(a);
-		scene_free(sc);
+		accel_free(b.a);
+		scene_free(b.s);
 		return 0;
 	}
 	/* the shuffled copy: a fixed pseudo-random order (xorshift64), its
@@ -180,19 +155,19 @@ int main(int argc, char **argv)
 	for (size_t i = 0; i < all.n; i++)
 		shuf.r[i] = all.r[perm[i]];
 	uint64_t hits, shits;
-	uint64_t h_all = pass(a, &all, NULL, &hits), h_shuf = pass(a, &shuf, perm, &shits);
+	uint64_t h_all = pass(b.a, &all, NULL, &hits), h_shuf = pass(b.a, &shuf, perm, &shits);
 	const struct set *sets[3] = { &first, &all, &shuf };
 	static const char *names[3] = { "first", "all", "shuffled" };
 	double best[3] = { 1e300, 1e300, 1e300 };
-	for (int f = 0; f < frames; f++) /* interleaved, so a load change hits all three */
+	for (int f = 0; f < b.frames; f++) /* interleaved, so a load change hits all three */
 		for (int k = 0; k < 3; k++) {
 			double t0 = bs_cpu_now();
-			pass(a, sets[k], NULL, NULL);
+			pass(b.a, sets[k], NULL, NULL);
 			double t = bs_cpu_now() - t0;
 			best[k] = t < best[k] ? t : best[k];
 		}
 	printf("%s %ux%u: %zu mirror rays (%.3f per pixel; %zu first bounces), %llu hit; best of %d, thread CPU time:\n",
-	       path, w, h, all.n, (double)all.n / ((double)w * h), first.n, (unsigned long long)hits, frames);
+	       b.path, b.w, b.h, all.n, (double)all.n / ((double)b.w * b.h), first.n, (unsigned long long)hits, b.frames);
 	for (int k = 0; k < 3; k++)
 		printf("  %-8s %6.2f Mrays/s (%.1f ns a ray)\n", names[k], (double)sets[k]->n / best[k] * 1e-6,
 		       best[k] / (double)sets[k]->n * 1e9);
@@ -202,7 +177,7 @@ int main(int argc, char **argv)
 	free(shuf.r);
 	free(all.r);
 	free(first.r);
-	accel_free(a);
-	scene_free(sc);
+	accel_free(b.a);
+	scene_free(b.s);
 	return h_all == h_shuf && hits == shits ? 0 : 1;
 }

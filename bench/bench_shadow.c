@@ -45,14 +45,10 @@ struct set {
 
 static int push(struct set *s, const struct pack *p)
 {
-	if (s->n == s->cap) {
-		size_t cap = s->cap ? 2 * s->cap : 4096;
-		struct pack *np = realloc(s->p, cap * sizeof *np);
-		if (!np)
-			return -1;
-		s->p = np;
-		s->cap = cap;
-	}
+	struct pack *np = bs_grow(s->p, &s->cap, s->n, sizeof *np, 4096);
+	if (!np)
+		return -1;
+	s->p = np;
 	s->p[s->n++] = *p;
 	s->rays += (size_t)p->n;
 	return 0;
@@ -125,42 +121,34 @@ static uint64_t pass(const struct accel *a, const struct set *s, enum mode m, ui
 
 int main(int argc, char **argv)
 {
-	const char *path;
-	int frames;
-	unsigned w, h;
-	if (bs_args(argc, argv, 7, &path, &frames, &w, &h)) {
-		fprintf(stderr, "usage: bench_shadow [SCENE [FRAMES [WIDTHxHEIGHT]]]\n");
-		return 64;
-	}
-	struct scene *sc;
-	struct accel *a;
-	if (bs_load(path, &sc, &a))
-		return 1;
-	struct cam c;
+	struct bs_bench b;
+	int rc = bs_start(argc, argv, 7, "bench_shadow [SCENE [FRAMES [WIDTHxHEIGHT]]]", &b);
+	if (rc)
+		return rc;
 	struct set s = { 0 };
-	if (cam_init(&c, &sc->camera, w, h) < 0 || make_rays(sc, a, &c, &s)) {
-		printf("%s: degenerate camera or out of memory\n", path);
+	if (make_rays(b.s, b.a, &b.c, &s)) {
+		printf("%s: out of memory\n", b.path);
 		return 1;
 	}
 	static const char *names[N_MODES] = { "single", "hint", "packet", "light" };
 	uint64_t hash[N_MODES];
 	double best[N_MODES] = { INFINITY, INFINITY, INFINITY, INFINITY };
 	for (int m = 0; m < N_MODES; m++)
-		hash[m] = pass(a, &s, (enum mode)m, sc->n_lights);
-	for (int f = 0; f < frames; f++) /* interleaved, so a load change hits all of them */
+		hash[m] = pass(b.a, &s, (enum mode)m, b.s->n_lights);
+	for (int f = 0; f < b.frames; f++) /* interleaved, so a load change hits all of them */
 		for (int m = 0; m < N_MODES; m++) {
 			double t0 = bs_cpu_now();
-			pass(a, &s, (enum mode)m, sc->n_lights);
+			pass(b.a, &s, (enum mode)m, b.s->n_lights);
 			double t = bs_cpu_now() - t0;
 			best[m] = t < best[m] ? t : best[m];
 		}
-	printf("%s %ux%u: %zu shadow rays (%.2f per pixel), best of %d, thread CPU time:\n", path, w, h, s.rays,
-	       (double)s.rays / ((double)w * h), frames);
+	printf("%s %ux%u: %zu shadow rays (%.2f per pixel), best of %d, thread CPU time:\n", b.path, b.w, b.h, s.rays,
+	       (double)s.rays / ((double)b.w * b.h), b.frames);
 	for (int m = 0; m < N_MODES; m++)
 		printf("  %-6s %6.2f Mrays/s; answers hash %016llx%s\n", names[m], (double)s.rays / best[m] * 1e-6,
 		       (unsigned long long)hash[m], hash[m] == hash[0] ? "" : " MISMATCH");
 	free(s.p);
-	accel_free(a);
-	scene_free(sc);
+	accel_free(b.a);
+	scene_free(b.s);
 	return 0;
 }
