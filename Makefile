@@ -44,7 +44,7 @@ endif
 
 ifdef SAN
 BUILD   := build/san
-ALL_CFLAGS += -fsanitize=$(SAN) -fno-omit-frame-pointer
+ALL_CFLAGS += -fsanitize=$(SAN) -fno-sanitize-recover=all -fno-omit-frame-pointer
 LDFLAGS += -fsanitize=$(SAN)
 else
 BUILD   := build
@@ -78,8 +78,11 @@ BENCH_BIN  := $(patsubst bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 TOOLS_BIN  := $(patsubst tests/tools/%.c,$(BUILD)/tools/%,$(TOOLS_SRC))
 
 .PHONY: all test test-deploy test-cross bench fuzz install uninstall clean
-# keep test and fuzz objects (chained pattern rules would delete them as intermediates)
-.SECONDARY:
+# keep the objects of tests, fuzz replays, benchmarks and tools, which
+# chained pattern rules would delete as intermediates (named one by one: a
+# bare .SECONDARY: would make every target one, and a missing one, such as
+# BIN_STAMP below, would then never be remade)
+.SECONDARY: $(call obj,$(UNIT_SRC) $(FUZZ_SRC) tests/fuzz/replay_main.c $(BENCH_SRC) $(TOOLS_SRC))
 all: $(MASTER_BIN) $(WORKER_BIN)
 
 $(BUILD)/%.o: %.c
@@ -98,13 +101,21 @@ $(LIBWORKER): $(WORKER_LIB_OBJ)
 	@mkdir -p $(dir $@)
 	rm -f $@ && $(AR) rcs $@ $^
 
-$(MASTER_BIN): $(BUILD)/master/main.o $(LIBMASTER) $(LIBCORE)
+# bin/ holds the programs of whichever build linked them last (the tests
+# run bin/): a stamp names that build, so that going from the plain build
+# to a sanitizer build (SAN=) or back relinks them even where bin/ is newer
+# than the other build's objects
+BIN_STAMP := bin/.built-in-$(subst /,-,$(BUILD))
+$(BIN_STAMP):
 	@mkdir -p bin
-	$(CC) $(LTO_LINK) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+	@rm -f bin/.built-in-*
+	@touch $@
 
-$(WORKER_BIN): $(BUILD)/worker/main.o $(LIBWORKER) $(LIBCORE)
-	@mkdir -p bin
-	$(CC) $(LTO_LINK) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+$(MASTER_BIN): $(BUILD)/master/main.o $(LIBMASTER) $(LIBCORE) $(BIN_STAMP)
+	$(CC) $(LTO_LINK) $(LDFLAGS) -o $@ $(filter-out $(BIN_STAMP),$^) $(LDLIBS)
+
+$(WORKER_BIN): $(BUILD)/worker/main.o $(LIBWORKER) $(LIBCORE) $(BIN_STAMP)
+	$(CC) $(LTO_LINK) $(LDFLAGS) -o $@ $(filter-out $(BIN_STAMP),$^) $(LDLIBS)
 
 $(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIBMASTER) $(LIBWORKER) $(LIBCORE)
 	@mkdir -p $(dir $@)
@@ -143,7 +154,11 @@ bench: all $(BENCH_BIN) $(TOOLS_BIN)
 # libFuzzer builds live under build/fuzz with clang; each target runs FUZZ_SECONDS.
 FUZZ_SECONDS ?= 600
 FUZZ_CC ?= clang
-FUZZ_FLAGS := $(CSTD) -g -O1 -I. -pthread -fsanitize=fuzzer,address,undefined
+# Undefined behaviour stops the fuzzer like a crash (UBSan would otherwise
+# print and go on). Each run's whole output is kept in build/fuzz/NAME.log
+# and what it found in build/fuzz/NAME-crash-* (leak-, timeout-, oom-); a
+# run that ends in a crash, leak, timeout or sanitizer report fails make.
+FUZZ_FLAGS := $(CSTD) -g -O1 -I. -pthread -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined
 fuzz:
 	@mkdir -p build/fuzz
 	@for f in $(FUZZ_SRC); do \
@@ -152,7 +167,9 @@ fuzz:
 	  $(FUZZ_CC) $(FUZZ_FLAGS) -DPORTRAY_VERSION='"$(VERSION)"' -o build/fuzz/$$n $$f $(COMMON_SRC) $(PROTO_SRC) -lm || exit 1; \
 	  mkdir -p build/fuzz/corpus-$$n; \
 	  build/fuzz/$$n -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 \
-	    build/fuzz/corpus-$$n tests/fuzz/corpus/$$n 2>&1 | tail -n 5 || exit 1; \
+	    -artifact_prefix=build/fuzz/$$n- build/fuzz/corpus-$$n tests/fuzz/corpus/$$n >build/fuzz/$$n.log 2>&1; rc=$$?; \
+	  tail -n 5 build/fuzz/$$n.log; \
+	  if [ $$rc -ne 0 ]; then echo "$$n: the fuzzer stopped with status $$rc (build/fuzz/$$n.log)"; exit 1; fi; \
 	done
 
 # What install puts where (uninstall removes the same list). The units name

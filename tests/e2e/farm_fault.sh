@@ -3,7 +3,9 @@
 # the tile is re-dispatched, the worker dropped, the image identical.
 # A worker that fails to trace its tiles.
 . "$(dirname "$0")/farm_lib.inc"
-start_worker good -j 1
+# the good worker takes 20 ms a tile, so that the faulty ones, however
+# slowly they start (a sanitizer build), get tiles before it has done all 30
+start_worker good -j 1 --test-delay-ms 20
 start_worker badsum -j 1 --test-fault bad-checksum
 start_worker badsize -j 1 --test-fault wrong-size
 local_render "$SCENE" "$T/local.ppm"
