@@ -81,7 +81,7 @@ TOOLS_BIN  := $(patsubst tests/tools/%.c,$(BUILD)/tools/%,$(TOOLS_SRC))
 # keep the objects of tests, fuzz replays, benchmarks and tools, which
 # chained pattern rules would delete as intermediates (named one by one: a
 # bare .SECONDARY: would make every target one, and a missing one, such as
-# BIN_STAMP below, would then never be remade)
+# bin/'s stamp below, would then never be remade)
 .SECONDARY: $(call obj,$(UNIT_SRC) $(FUZZ_SRC) tests/fuzz/replay_main.c $(BENCH_SRC) $(TOOLS_SRC))
 all: $(MASTER_BIN) $(WORKER_BIN)
 
@@ -102,20 +102,24 @@ $(LIBWORKER): $(WORKER_LIB_OBJ)
 	rm -f $@ && $(AR) rcs $@ $^
 
 # bin/ holds the programs of whichever build linked them last (the tests
-# run bin/): a stamp names that build, so that going from the plain build
-# to a sanitizer build (SAN=) or back relinks them even where bin/ is newer
-# than the other build's objects
-BIN_STAMP := bin/.built-in-$(subst /,-,$(BUILD))
-$(BIN_STAMP):
-	@mkdir -p bin
-	@rm -f bin/.built-in-*
+# run bin/): a stamp beside them names that build, so that going from the
+# plain build to a sanitizer build (SAN=) or back relinks them even where
+# they are newer than the other build's objects. (The cross builds of
+# tests/tools/cross_build.sh put theirs, and their stamps, in their own
+# directories.)
+BUILT_IN := .built-in-$(subst /,-,$(BUILD))
+MASTER_STAMP := $(dir $(MASTER_BIN))$(BUILT_IN)
+WORKER_STAMP := $(dir $(WORKER_BIN))$(BUILT_IN)
+%/$(BUILT_IN):
+	@mkdir -p $(@D)
+	@rm -f $(@D)/.built-in-*
 	@touch $@
 
-$(MASTER_BIN): $(BUILD)/master/main.o $(LIBMASTER) $(LIBCORE) $(BIN_STAMP)
-	$(CC) $(LTO_LINK) $(LDFLAGS) -o $@ $(filter-out $(BIN_STAMP),$^) $(LDLIBS)
+$(MASTER_BIN): $(BUILD)/master/main.o $(LIBMASTER) $(LIBCORE) $(MASTER_STAMP)
+	$(CC) $(LTO_LINK) $(LDFLAGS) -o $@ $(filter-out $(MASTER_STAMP),$^) $(LDLIBS)
 
-$(WORKER_BIN): $(BUILD)/worker/main.o $(LIBWORKER) $(LIBCORE) $(BIN_STAMP)
-	$(CC) $(LTO_LINK) $(LDFLAGS) -o $@ $(filter-out $(BIN_STAMP),$^) $(LDLIBS)
+$(WORKER_BIN): $(BUILD)/worker/main.o $(LIBWORKER) $(LIBCORE) $(WORKER_STAMP)
+	$(CC) $(LTO_LINK) $(LDFLAGS) -o $@ $(filter-out $(WORKER_STAMP),$^) $(LDLIBS)
 
 $(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(LIBMASTER) $(LIBWORKER) $(LIBCORE)
 	@mkdir -p $(dir $@)

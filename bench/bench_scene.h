@@ -8,6 +8,7 @@
 #ifndef PORTRAY_BENCH_SCENE_H
 #define PORTRAY_BENCH_SCENE_H
 
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -95,13 +96,21 @@ static inline int bs_start(int argc, char **argv, int def_frames, const char *us
 }
 
 /* Room for element n of the growable array p of *cap elements of elem
- * bytes (the capacity doubles, from first): p, or the array moved, or NULL
- * when out of memory (p is then still the caller's). */
+ * bytes (the capacity doubles, from first, until it holds n): p, or the
+ * array moved, or NULL when out of memory or past SIZE_MAX bytes (p is
+ * then still the caller's). */
 static inline void *bs_grow(void *p, size_t *cap, size_t n, size_t elem, size_t first)
 {
 	if (n < *cap)
 		return p;
-	size_t c = *cap ? 2 * *cap : first;
+	size_t c = *cap ? *cap : first;
+	while (c <= n) {
+		if (c > SIZE_MAX / 2)
+			return NULL;
+		c *= 2;
+	}
+	if (c > SIZE_MAX / elem)
+		return NULL;
 	void *np = realloc(p, c * elem);
 	if (np)
 		*cap = c;

@@ -12,8 +12,9 @@
  * may perturb the normal or the material, are left out. The rays are made
  * once, then traced in three orders, FRAMES times each, interleaved:
  *   - "first": the first bounces alone, in pixel order;
- *   - "all": every bounce in the order made (a pixel's chain, then the
- *     next pixel's), as the renderer traces them;
+ *   - "all": every bounce in the renderer's order: a pixel's chain, then
+ *     the next pixel's, pixels in the order tiles of TILE_DEFAULT and
+ *     their 8x8 and 2x2 blocks take them (render.c);
  *   - "shuffled": the same rays in a fixed pseudo-random order (what
  *     tracing them with nothing in common between neighbours costs).
  * It prints each order's best rate in Mrays/s of thread CPU time, and a
@@ -32,6 +33,7 @@
 #include "common/accel.h"
 #include "common/camera.h"
 #include "common/limits.h"
+#include "common/tiles.h"
 #include "bench/bench_scene.h"
 
 #define MIN_WEIGHT (1.0 / 512.0) /* shade.c's SHADE_MIN_WEIGHT */
@@ -54,10 +56,11 @@ static int push(struct set *s, const struct ray *r)
 static double maxc(vec3 v) { return v.x > v.y ? (v.x > v.z ? v.x : v.z) : (v.y > v.z ? v.y : v.z); }
 
 /* The mirror ray off hit h of ray r, when h's material reflects with the
- * weight kept at MIN_WEIGHT or more; *w is updated. */
+ * weight kept at MIN_WEIGHT or more; *w is updated. surf_prepare's facing
+ * test and reflect_ray's fallback (shade.c), without shaders. */
 static bool mirror(const struct scene *sc, const struct ray *r, const struct hit *h, double *w, struct ray *out)
 {
-	if (h->material == SCENE_NONE || h->material >= sc->n_materials)
+	if (sc->image.no_reflections || h->material == SCENE_NONE || h->material >= sc->n_materials)
 		return false;
 	const struct scene_material *m = &sc->materials[h->material];
 	if (!(m->reflection > 0))
@@ -66,7 +69,7 @@ static bool mirror(const struct scene *sc, const struct ray *r, const struct hit
 	if (!(*w >= MIN_WEIGHT))
 		return false;
 	vec3 ng = h->ng, n = h->n;
-	if (v3_dot(ng, r->d) > 0) { /* facing the viewer */
+	if (!(v3_dot(ng, r->d) < 0)) { /* turned to face the viewer */
 		ng = v3_neg(ng);
 		n = v3_neg(n);
 	}
@@ -77,24 +80,46 @@ static bool mirror(const struct scene *sc, const struct ray *r, const struct hit
 	return true;
 }
 
-/* Every pixel's chain of mirror rays into all (in the order made), the
- * first bounces alone into first. */
+/* Pixel (x, y)'s chain of mirror rays appended to all (the first to
+ * first too). */
+static int pixel_rays(const struct scene *sc, const struct accel *a, const struct cam *c, uint32_t x, uint32_t y,
+		      struct set *all, struct set *first)
+{
+	struct ray r = cam_ray(c, x + 0.5, y + 0.5), m;
+	struct hit h;
+	double w = 1;
+	for (int depth = 0; depth < LIM_TRACE_DEPTH; depth++) {
+		if (!accel_intersect(a, &r, &h) || !mirror(sc, &r, &h, &w, &m))
+			break;
+		if (push(all, &m) || (depth == 0 && push(first, &m)))
+			return -1;
+		r = m;
+	}
+	return 0;
+}
+
+/* Every pixel's chain of mirror rays in the order the renderer shades the
+ * pixels (render.c): TILE_DEFAULT tiles row by row, each tile's 8x8
+ * blocks row by row, each 8x8 block's sixteen 2x2 blocks in tile_blocks'
+ * order (the 4x4 quarters, each 2x2 blocks), each 2x2 block's pixels row
+ * by row; a pixel's whole chain before the next pixel's. */
 static int make_rays(const struct scene *sc, const struct accel *a, const struct cam *c, struct set *all,
 		     struct set *first)
 {
-	for (uint32_t y = 0; y < c->h; y++)
-		for (uint32_t x = 0; x < c->w; x++) {
-			struct ray r = cam_ray(c, x + 0.5, y + 0.5), m;
-			struct hit h;
-			double w = 1;
-			for (int depth = 0; depth < LIM_TRACE_DEPTH; depth++) {
-				if (!accel_intersect(a, &r, &h) || !mirror(sc, &r, &h, &w, &m))
-					break;
-				if (push(all, &m) || (depth == 0 && push(first, &m)))
-					return -1;
-				r = m;
-			}
-		}
+	const uint32_t T = TILE_DEFAULT;
+	for (uint32_t ty = 0; ty < c->h; ty += T)
+		for (uint32_t tx = 0; tx < c->w; tx += T)
+			for (uint32_t j = 0; j < T; j += 8)
+				for (uint32_t i = 0; i < T; i += 8)
+					for (int b = 0; b < 16; b++)
+						for (uint32_t k = 0; k < 4; k++) {
+							uint32_t ii = i + 2 * (b & 1) + 4 * (b >> 2 & 1) + (k & 1);
+							uint32_t jj = j + 2 * (b >> 1 & 1) + 4 * (b >> 3) + (k >> 1);
+							uint32_t x = tx + ii, y = ty + jj;
+							if (ii < T && jj < T && x < c->w && y < c->h &&
+							    pixel_rays(sc, a, c, x, y, all, first))
+								return -1;
+						}
 	return 0;
 }
 
@@ -126,22 +151,33 @@ int main(int argc, char **argv)
 	struct set all = { 0 }, first = { 0 };
 	if (make_rays(b.s, b.a, &b.c, &all, &first)) {
 		printf("%s: out of memory\n", b.path);
-		return 1;
-	}
-	if (all.n == 0 || all.n > UINT32_MAX) {
-		printf("%s %ux%u: no mirror rays (no reflective material seen)\n", b.path, b.w, b.h);
 		free(all.r);
+		free(first.r);
 		accel_free(b.a);
 		scene_free(b.s);
-		return 0;
+		return 1;
+	}
+	uint32_t *perm = NULL;
+	struct set shuf = { 0 };
+	int status = 0;
+	if (all.n == 0) {
+		printf("%s %ux%u: no mirror rays (no reflective material seen)\n", b.path, b.w, b.h);
+		goto out;
+	}
+	status = 1;
+	if (all.n > UINT32_MAX) {
+		printf("%s: %zu mirror rays, more than this bench counts\n", b.path, all.n);
+		goto out;
 	}
 	/* the shuffled copy: a fixed pseudo-random order (xorshift64), its
 	 * rays stored in that order so that reading them costs what it costs
 	 * in the others */
-	uint32_t *perm = malloc(all.n * sizeof *perm);
-	struct set shuf = { malloc(all.n * sizeof *shuf.r), all.n, all.n };
-	if (!perm || !shuf.r)
-		return 1;
+	perm = malloc(all.n * sizeof *perm);
+	shuf = (struct set){ malloc(all.n * sizeof *shuf.r), all.n, all.n };
+	if (!perm || !shuf.r) {
+		printf("%s: out of memory\n", b.path);
+		goto out;
+	}
 	uint64_t x = 88172645463325252ull;
 	for (size_t i = 0; i < all.n; i++)
 		perm[i] = (uint32_t)i;
@@ -173,11 +209,13 @@ int main(int argc, char **argv)
 		       best[k] / (double)sets[k]->n * 1e9);
 	printf("  hits hash %016llx, shuffled %016llx%s\n", (unsigned long long)h_all, (unsigned long long)h_shuf,
 	       h_all == h_shuf && hits == shits ? "" : " MISMATCH");
+	status = h_all == h_shuf && hits == shits ? 0 : 1;
+out:
 	free(perm);
 	free(shuf.r);
 	free(all.r);
 	free(first.r);
 	accel_free(b.a);
 	scene_free(b.s);
-	return h_all == h_shuf && hits == shits ? 0 : 1;
+	return status;
 }

@@ -3,8 +3,9 @@
 # the tile is re-dispatched, the worker dropped, the image identical.
 # A worker that fails to trace its tiles.
 . "$(dirname "$0")/farm_lib.inc"
-# the good worker takes 20 ms a tile, so that the faulty ones, however
-# slowly they start (a sanitizer build), get tiles before it has done all 30
+# the good worker takes 20 ms a tile, about 0.6 s for all 30: time for the
+# faulty ones to start and get tiles even in a sanitizer build (where,
+# without it, the wrong-size worker got none and went unnoticed)
 start_worker good -j 1 --test-delay-ms 20
 start_worker badsum -j 1 --test-fault bad-checksum
 start_worker badsize -j 1 --test-fault wrong-size
