@@ -134,7 +134,6 @@ static void frame_big(const struct accel *a, const struct cam *c, const struct f
 
 int main(int argc, char **argv)
 {
-
 	uint32_t side = 8; /* --4x4, --2x2: smaller blocks */
 	if (argc > 1 && (strcmp(argv[1], "--4x4") == 0 || strcmp(argv[1], "--2x2") == 0)) {
 		side = argv[1][2] == '4' ? 4 : 2;
@@ -151,58 +150,52 @@ int main(int argc, char **argv)
 			  &b);
 	if (rc)
 		return rc;
-	const char *path = b.path;
-	int frames = b.frames;
-	unsigned w = b.w, h = b.h;
-	struct scene *s = b.s;
-	struct accel *a = b.a;
-	struct cam c = b.c;
 	/* the renderer's eye rays when it makes them by filter_eye_block */
 	struct filter_chain *fc = malloc(sizeof *fc);
-	if (fc && (filter_chain_init(fc, &s->camera, &s->image, w, h) < 0 || !filter_single_ray(fc))) {
+	if (fc && (filter_chain_init(fc, &b.s->camera, &b.s->image, b.w, b.h) < 0 || !filter_single_ray(fc))) {
 		free(fc);
 		fc = NULL;
 	}
-	struct hit *row2 = malloc(8 * (size_t)w * sizeof *row2);
-	bool *hit2 = malloc(8 * (size_t)w * sizeof *hit2);
+	struct hit *row2 = malloc(8 * (size_t)b.w * sizeof *row2);
+	bool *hit2 = malloc(8 * (size_t)b.w * sizeof *hit2);
 	if (!row2 || !hit2) {
 		fprintf(stderr, "bench_primary: out of memory\n");
 		return 1;
 	}
 	/* hashing costs time: frames of their own, untimed */
 	uint64_t hash = 0, hash_p = 0;
-	frame_single(a, &c, &hash);
-	if (!fc || w % side || h % side)
+	frame_single(b.a, &b.c, &hash);
+	if (!fc || b.w % side || b.h % side)
 		side = 2;
 	if (side > 2)
-		frame_big(a, &c, fc, side, &hash_p, row2, hit2);
+		frame_big(b.a, &b.c, fc, side, &hash_p, row2, hit2);
 	else
-		frame_packets(a, &c, fc, &hash_p, row2, hit2);
+		frame_packets(b.a, &b.c, fc, &hash_p, row2, hit2);
 	double best = INFINITY;
-	for (int i = 0; i < frames; i++) {
+	for (int i = 0; i < b.frames; i++) {
 		double t0 = bs_cpu_now();
 		if (single)
-			frame_single(a, &c, NULL);
+			frame_single(b.a, &b.c, NULL);
 		else if (side > 2)
-			frame_big(a, &c, fc, side, NULL, NULL, NULL);
+			frame_big(b.a, &b.c, fc, side, NULL, NULL, NULL);
 		else
-			frame_packets(a, &c, fc, NULL, NULL, NULL);
+			frame_packets(b.a, &b.c, fc, NULL, NULL, NULL);
 		double t = bs_cpu_now() - t0;
 		best = t < best ? t : best;
 	}
 	printf("%s %ux%u: %.2f Mrays/s on 1 thread, %s (best of %d frames, thread CPU time); hits hash %016llx%s\n",
-	       path, w, h, (double)w * h / best * 1e-6,
+	       b.path, b.w, b.h, (double)b.w * b.h / best * 1e-6,
 	       single ? "single rays"
 	       : side == 8 ? "8x8 blocks of 2x2 packets, filter_eye_block"
 	       : side == 4 ? "4x4 blocks of 2x2 packets, filter_eye_block"
 	       : fc   ? "2x2 packets, filter_eye_block"
 		      : "2x2 packets, cam_ray",
-	       frames,
+	       b.frames,
 	       (unsigned long long)hash, hash == hash_p ? "" : " MISMATCH: packets and single rays differ");
 	free(fc);
 	free(row2);
 	free(hit2);
-	accel_free(a);
-	scene_free(s);
+	accel_free(b.a);
+	scene_free(b.s);
 	return 0;
 }

@@ -33,10 +33,9 @@
 #include "common/accel.h"
 #include "common/camera.h"
 #include "common/limits.h"
+#include "common/shade.h"
 #include "common/tiles.h"
 #include "bench/bench_scene.h"
-
-#define MIN_WEIGHT (1.0 / 512.0) /* shade.c's SHADE_MIN_WEIGHT */
 
 struct set {
 	struct ray *r;
@@ -56,7 +55,7 @@ static int push(struct set *s, const struct ray *r)
 static double maxc(vec3 v) { return v.x > v.y ? (v.x > v.z ? v.x : v.z) : (v.y > v.z ? v.y : v.z); }
 
 /* The mirror ray off hit h of ray r, when h's material reflects with the
- * weight kept at MIN_WEIGHT or more; *w is updated. surf_prepare's facing
+ * weight kept at SHADE_MIN_WEIGHT or more; *w is updated. surf_prepare's facing
  * test and reflect_ray's fallback (shade.c), without shaders. */
 static bool mirror(const struct scene *sc, const struct ray *r, const struct hit *h, double *w, struct ray *out)
 {
@@ -66,7 +65,7 @@ static bool mirror(const struct scene *sc, const struct ray *r, const struct hit
 	if (!(m->reflection > 0))
 		return false;
 	*w *= maxc(v3_scale(m->spec_colour, m->reflection));
-	if (!(*w >= MIN_WEIGHT))
+	if (!(*w >= SHADE_MIN_WEIGHT))
 		return false;
 	vec3 ng = h->ng, n = h->n;
 	if (!(v3_dot(ng, r->d) < 0)) { /* turned to face the viewer */
@@ -98,28 +97,33 @@ static int pixel_rays(const struct scene *sc, const struct accel *a, const struc
 	return 0;
 }
 
+/* Pixel p (0 .. T T - 1) of a tile of side T in the order tile_blocks
+ * (render.c) shades them: the tile's 8x8 blocks row by row, each one's
+ * sixteen 2x2 blocks as next_8x8 adds them, each 2x2 block row by row;
+ * its place in the tile into *i, *j. */
+_Static_assert(TILE_DEFAULT % 8 == 0, "whole 8x8 blocks in a tile");
+static void tile_pixel(uint32_t T, uint32_t p, uint32_t *i, uint32_t *j)
+{
+	uint32_t blk = p / 64, b = p % 64 / 4, k = p % 4;
+	*i = blk % (T / 8) * 8 + 2 * (b & 1) + 4 * (b >> 2 & 1) + (k & 1);
+	*j = blk / (T / 8) * 8 + 2 * (b >> 1 & 1) + 4 * (b >> 3) + (k >> 1);
+}
+
 /* Every pixel's chain of mirror rays in the order the renderer shades the
- * pixels (render.c): TILE_DEFAULT tiles row by row, each tile's 8x8
- * blocks row by row, each 8x8 block's sixteen 2x2 blocks in tile_blocks'
- * order (the 4x4 quarters, each 2x2 blocks), each 2x2 block's pixels row
- * by row; a pixel's whole chain before the next pixel's. */
+ * pixels: TILE_DEFAULT tiles row by row, each in tile_pixel's order; a
+ * pixel's whole chain before the next pixel's. */
 static int make_rays(const struct scene *sc, const struct accel *a, const struct cam *c, struct set *all,
 		     struct set *first)
 {
 	const uint32_t T = TILE_DEFAULT;
 	for (uint32_t ty = 0; ty < c->h; ty += T)
 		for (uint32_t tx = 0; tx < c->w; tx += T)
-			for (uint32_t j = 0; j < T; j += 8)
-				for (uint32_t i = 0; i < T; i += 8)
-					for (int b = 0; b < 16; b++)
-						for (uint32_t k = 0; k < 4; k++) {
-							uint32_t ii = i + 2 * (b & 1) + 4 * (b >> 2 & 1) + (k & 1);
-							uint32_t jj = j + 2 * (b >> 1 & 1) + 4 * (b >> 3) + (k >> 1);
-							uint32_t x = tx + ii, y = ty + jj;
-							if (ii < T && jj < T && x < c->w && y < c->h &&
-							    pixel_rays(sc, a, c, x, y, all, first))
-								return -1;
-						}
+			for (uint32_t p = 0; p < T * T; p++) {
+				uint32_t i, j;
+				tile_pixel(T, p, &i, &j);
+				if (tx + i < c->w && ty + j < c->h && pixel_rays(sc, a, c, tx + i, ty + j, all, first))
+					return -1;
+			}
 	return 0;
 }
 
@@ -148,23 +152,18 @@ int main(int argc, char **argv)
 	int rc = bs_start(argc, argv, 5, "bench_secondary [SCENE [FRAMES [WIDTHxHEIGHT]]]", &b);
 	if (rc)
 		return rc;
-	struct set all = { 0 }, first = { 0 };
+	struct set all = { 0 }, first = { 0 }, shuf = { 0 };
+	uint32_t *perm = NULL;
+	int status = 1;
 	if (make_rays(b.s, b.a, &b.c, &all, &first)) {
 		printf("%s: out of memory\n", b.path);
-		free(all.r);
-		free(first.r);
-		accel_free(b.a);
-		scene_free(b.s);
-		return 1;
+		goto out;
 	}
-	uint32_t *perm = NULL;
-	struct set shuf = { 0 };
-	int status = 0;
 	if (all.n == 0) {
+		status = 0;
 		printf("%s %ux%u: no mirror rays (no reflective material seen)\n", b.path, b.w, b.h);
 		goto out;
 	}
-	status = 1;
 	if (all.n > UINT32_MAX) {
 		printf("%s: %zu mirror rays, more than this bench counts\n", b.path, all.n);
 		goto out;

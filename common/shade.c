@@ -27,9 +27,6 @@
 #include "common/shader.h"
 #include "common/xmath.h"
 
-/* A ray whose contribution to the pixel would be below this is not traced:
- * 1/512 is a quarter of one 8-bit step at full brightness. */
-#define SHADE_MIN_WEIGHT (1.0 / 512.0)
 /* Stream tags for rng_derive: one purpose each. */
 #define TAG_LIGHT 0x4c49474854000000ull /* + light index */
 #define TAG_REFLECT 0x5245464cull

@@ -12,6 +12,10 @@
 
 struct shade_ctx;
 
+/* A ray whose contribution to the pixel would be below this is not traced:
+ * 1/512 is a quarter of one 8-bit step at full brightness. */
+#define SHADE_MIN_WEIGHT (1.0 / 512.0)
+
 /* Prepares shading for a scene and its accel (both must outlive it). */
 int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx **out,
 		  struct scene_error *err);
