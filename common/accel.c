@@ -89,199 +89,12 @@
 #include <emmintrin.h>
 #endif
 
+#include "common/accel_box.h"
 #include "common/accel_int.h"
 #include "common/accel_trace.h"
 #include "common/cancel.h"
 #include "common/xmath.h"
 
-/* ---- a ray's box tests ------------------------------------------------------------- */
-
-struct ray4 {
-#if defined(__SSE2__)
-	__m128 o[3], inv_near[3], inv_far[3];
-#else
-	float o[3], inv_near[3], inv_far[3];
-#endif
-	/* the direction's octant: bit k set when d[k] is negative (its sign
-	 * bit, -0 included: the sign of the inverses); picks the near plane of each
-	 * axis (hi[k] for a negative direction, lo[k] else), the "sign" trick */
-	uint32_t oct;
-	double tscale; /* box-space t = ray t * tscale */
-};
-
-_Static_assert(offsetof(struct bvh4, hi) == 12 * sizeof(float), "bvh4 rows: lo[3][4] then hi[3][4]");
-
-/* 2^e for an integer e in [-1022, 1023], exactly. */
-static inline double pow2(int e)
-{
-	uint64_t bits = (uint64_t)(e + 1023) << 52;
-	double x;
-	memcpy(&x, &bits, sizeof x);
-	return x;
-}
-
-/* A ray's box-test constants in float (BOX TESTS, accel_int.h): the origin
- * relative to the group's centre and the widened inverses of the scaled
- * direction; tscale and the octant as in struct ray4. */
-struct ray_box {
-	float o[3], inv_near[3], inv_far[3];
-	double tscale;
-	uint32_t oct;
-};
-
-static inline void ray_box_init(struct ray_box *q, const struct trace *r, vec3 center)
-{
-	double ax = fabs(r->d.x), ay = fabs(r->d.y), az = fabs(r->d.z);
-	double m = ax > ay ? ax : ay;
-	m = m > az ? m : az;
-	uint64_t bits;
-	memcpy(&bits, &m, sizeof bits);
-	int e = (int)(bits >> 52 & 0x7ff) - 1023; /* floor(log2 m) for normal m */
-	if (e < -1000 || e > 1000)
-		e = 0; /* absurd scales: left unscaled (the +-1e30 rule still holds) */
-	double s = pow2(-e);
-	q->tscale = pow2(e);
-	q->oct = ray_octant(r->d);
-	double o[3] = { r->o.x - center.x, r->o.y - center.y, r->o.z - center.z };
-	double d[3] = { r->d.x, r->d.y, r->d.z };
-	for (uint32_t k = 0; k < 3; k++) {
-		double dk = d[k] * s;
-		double iv = fabs(dk) > 1e-30 ? 1.0 / dk : copysign(1e30, dk);
-		/* the widening, folded into the inverse (BOX TESTS, accel_int.h) */
-		q->inv_near[k] = (float)(iv * (1 - BOX_WIDEN));
-		q->inv_far[k] = (float)(iv * (1 + BOX_WIDEN));
-		q->o[k] = (float)o[k];
-	}
-}
-
-static inline void ray4_init(struct ray4 *q, const struct trace *r, vec3 center)
-{
-	struct ray_box b;
-	ray_box_init(&b, r, center);
-	q->tscale = b.tscale;
-	q->oct = b.oct;
-	for (uint32_t k = 0; k < 3; k++) {
-#if defined(__SSE2__)
-		q->o[k] = _mm_set1_ps(b.o[k]);
-		q->inv_near[k] = _mm_set1_ps(b.inv_near[k]);
-		q->inv_far[k] = _mm_set1_ps(b.inv_far[k]);
-#else
-		q->o[k] = b.o[k];
-		q->inv_near[k] = b.inv_near[k];
-		q->inv_far[k] = b.inv_far[k];
-#endif
-	}
-}
-
-/*
- * The box tests' tmin and tmax: x >= 0 rounded to a float, down for tmin
- * and up for tmax, without a branch (tmax changes at every leaf that hits,
- * and a data-dependent branch there costs more than the box test). The
- * factor covers float rounding's relative error (2^-24) of normal values
- * and the tiny term its absolute error (2^-150) of subnormal ones; inf
- * stays inf. A tmin below 0 by the tiny term only lets a box through.
- */
-static inline float box_tmin(double x) { return (float)(x * (1 - 0x1p-22) - 0x1p-140); }
-static inline float box_tmax(double x) { return (float)(x * (1 + 0x1p-22) + 0x1p-140); }
-
-/*
- * Slab test of four children against [tmin, tmax] (box space, tmin >= 0):
- * slab4, and node4_hit for a node's. Returns a mask (bit c: child c may be hit) and the widened
- * entry distances in tn.
- *
- * The near plane of each axis is chosen once per ray by the direction's
- * sign (the "sign" trick): inv is never 0, inf or NaN, and lo <= hi, so
- * (lo - o) * inv and (hi - o) * inv are ordered by inv's sign (rounding is
- * monotonic). Each entry distance is multiplied by 1 - BOX_WIDEN and each
- * exit distance by 1 + BOX_WIDEN through the inverses (ray4_init): an
- * entry distance that matters is >= tmin >= 0, so that moves it toward 0,
- * and an exit distance that matters is >= 0, so that moves it away; a
- * negative one belongs to a box behind the origin by more than the
- * padding. NaN bounds (unused slots) never hit: max returns its second
- * operand when one is NaN, as SSE's does, so t0 becomes NaN and t0 <= t1
- * fails.
- */
-#if defined(__SSE2__)
-typedef __m128 tspan; /* tmin or tmax broadcast to the four lanes */
-static inline tspan tspan_of(float t) { return _mm_set1_ps(t); }
-#else
-typedef float tspan;
-static inline tspan tspan_of(float t) { return t; }
-#endif
-
-/* The slab test of four children whose bounds are rows of w floats
- * (lo[3][w] then hi[3][w]) from b: lanes b[0..4) of each row. */
-static inline __attribute__((always_inline)) int slab4(const float *b, const uint32_t w, const struct ray4 *q,
-							uint32_t oct, tspan tmin, tspan tmax, float tn[4])
-{
-	/* lo[k] at w k, hi[k] at w (3 + k); the near plane by the octant */
-	const uint32_t near[3] = { 3 * w * (oct & 1), w + 3 * w * (oct >> 1 & 1), 2 * w + 3 * w * (oct >> 2 & 1) };
-	const uint32_t far[3] = { 3 * w * (~oct & 1), w + 3 * w * (~oct >> 1 & 1), 2 * w + 3 * w * (~oct >> 2 & 1) };
-#if defined(__SSE2__)
-	__m128 t0 = tmin, t1 = tmax;
-	for (int k = 0; k < 3; k++) {
-		__m128 tnear = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + near[k]), q->o[k]), q->inv_near[k]);
-		__m128 tfar = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(b + far[k]), q->o[k]), q->inv_far[k]);
-		t0 = _mm_max_ps(t0, tnear);
-		t1 = _mm_min_ps(t1, tfar);
-	}
-	_mm_storeu_ps(tn, t0);
-	return _mm_movemask_ps(_mm_cmple_ps(t0, t1));
-#else
-	int mask = 0;
-	for (int c = 0; c < 4; c++) {
-		float t0 = tmin, t1 = tmax;
-		for (int k = 0; k < 3; k++) {
-			float tnear = (b[near[k] + (uint32_t)c] - q->o[k]) * q->inv_near[k];
-			float tfar = (b[far[k] + (uint32_t)c] - q->o[k]) * q->inv_far[k];
-			t0 = t0 > tnear ? t0 : tnear; /* _mm_max_ps(t0, tnear) */
-			t1 = t1 < tfar ? t1 : tfar;   /* _mm_min_ps(t1, tfar) */
-		}
-		tn[c] = t0;
-		mask |= (t0 <= t1) << c;
-	}
-	return mask;
-#endif
-}
-
-static inline __attribute__((always_inline)) int node4_hit(const struct bvh4 *nd, const struct ray4 *q,
-							    uint32_t oct, tspan tmin, tspan tmax, float tn[4])
-{
-	return slab4((const float *)(const void *)nd, 4, q, oct, tmin, tmax, tn);
-}
-
-/*
- * node4_hit on a WIDE NODE (bvh.h): the same slab test, eight children in
- * two 4-lane halves; bit c of the mask for child c, entry distances in
- * tn[0..8).
- */
-_Static_assert(offsetof(struct bvh8, hi) == 24 * sizeof(float), "bvh8 rows: lo[3][8] then hi[3][8]");
-
-static inline __attribute__((always_inline)) int node8_hit(const struct bvh8 *nd, const struct ray4 *q,
-							    uint32_t oct, tspan tmin, tspan tmax, float tn[8])
-{
-	const float *b = (const float *)(const void *)nd;
-	return slab4(b, 8, q, oct, tmin, tmax, tn) | slab4(b + 4, 8, q, oct, tmin, tmax, tn + 4) << 4;
-}
-
-#define SLAB_WIDEN 4.5e-16 /* 1 + 2 gamma(3) for doubles, rounded up (Ize 2013) */
-
-/* The same test in double on one box of six floats (a root that is a leaf). */
-static bool box_hit(const float b[6], vec3 center, const struct trace *r)
-{
-	double o[3] = { r->o.x - center.x, r->o.y - center.y, r->o.z - center.z };
-	double d[3] = { r->d.x, r->d.y, r->d.z };
-	double t0 = r->tmin, t1 = r->tmax;
-	for (int k = 0; k < 3; k++) {
-		double inv = fabs(d[k]) > 1e-300 ? 1.0 / d[k] : copysign(1e300, d[k]);
-		double a = ((double)b[k] - o[k]) * inv, c = ((double)b[k + 3] - o[k]) * inv;
-		double lo = a < c ? a : c, hi = a < c ? c : a;
-		t0 = lo > t0 ? lo : t0;
-		t1 = hi < t1 ? hi : t1;
-	}
-	t1 += fabs(t1) * SLAB_WIDEN;
-	return t0 <= t1;
-}
 
 /* ---- instances and the rarer kinds --------------------------------------------------- */
 
@@ -306,22 +119,28 @@ static bool inst_hit(const struct accel *A, const struct ginst *in, const struct
 	struct hit lh;
 	if (!group_hit(A, A->dgroup[si->define], &lr, &lh, brute))
 		return false;
-	surface_complete(A->s, &lh); /* in the define's space */
-	h->t = lh.t;
-	h->n = v3_norm(m34_normal(&inv, lh.n));
-	h->ng = v3_norm(m34_normal(&inv, lh.ng));
-	h->u = lh.u;
-	h->v = lh.v;
-	h->object = lh.object;
-	uint32_t im = si->material;
-	if (lh.material == SCENE_NONE && im != SCENE_NONE) {
-		h->material = im;
-		h->mp = lh.p; /* the instance's own object space is the define's space */
-	} else {
-		h->material = lh.material;
-		h->mp = lh.mp;
-	}
+	accel_inst_to_parent(A, si, &inv, &lh, h);
 	return true;
+}
+
+void accel_inst_to_parent(const struct accel *A, const struct scene_inst *si, const mat34 *inv, struct hit *lh,
+			  struct hit *h)
+{
+	surface_complete(A->s, lh); /* in the define's space */
+	h->t = lh->t;
+	h->n = v3_norm(m34_normal(inv, lh->n));
+	h->ng = v3_norm(m34_normal(inv, lh->ng));
+	h->u = lh->u;
+	h->v = lh->v;
+	h->object = lh->object;
+	uint32_t im = si->material;
+	if (lh->material == SCENE_NONE && im != SCENE_NONE) {
+		h->material = im;
+		h->mp = lh->p; /* the instance's own object space is the define's space */
+	} else {
+		h->material = lh->material;
+		h->mp = lh->mp;
+	}
 }
 
 bool accel_inst_occluded(const struct accel *A, const struct ginst *in, const struct trace *r)

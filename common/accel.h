@@ -143,6 +143,52 @@ bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ra
 void accel_occluded4(const struct accel *a, const struct ray r[4], bool occ[4], uint32_t *hint);
 
 /*
+ * SHADOW CROSSINGS: the surfaces a shadow segment crosses, for the light
+ * that transparent ones let through (docs/rendering.md, Shadows). Every
+ * hit in (tmin, tmax) along the ray, each primitive's every one (a sphere
+ * crossed is two), counts; hits at one t count once, as the surface of
+ * the least key there (CANONICAL TIES, accel_trace.h); an opaque surface
+ * anywhere on the segment blocks it, so the query stops at the first one it
+ * meets. What a surface lets through is the filter's: f->opaque[m] != 0
+ * says material m (m < f->n_materials; the default material at
+ * f->n_materials) is opaque everywhere, so its hits need no more; at any
+ * other hit, completed as accel_intersect would give it (world space, u,
+ * v and mp through accel_hit_surface), f->pass says whether it is opaque
+ * there, and if not what it lets through.
+ */
+#define ACCEL_CROSS_MAX 64
+struct accel_pass {
+	vec3 col;  /* tran-colour, clamped at 0 */
+	double td; /* transparency, in (0, 1] */
+};
+struct accel_crossings {
+	int n; /* in order of t; x[k].key is the surface's tie key */
+	struct accel_crossing {
+		double t;
+		uint64_t key;
+		struct accel_pass p;
+	} x[ACCEL_CROSS_MAX];
+};
+struct accel_cross_filter {
+	const uint8_t *opaque;
+	uint32_t n_materials;
+	bool (*pass)(const void *ctx, struct hit *h, struct accel_pass *p);
+	const void *ctx;
+};
+/* The crossings of r's segment into *x, in order of t; false when an
+ * opaque surface blocks it or more than ACCEL_CROSS_MAX crossings lie on
+ * it (x is then undefined). *hint is as accel_occluded_hint's: a
+ * reference that blocked an earlier segment, tested first; on "blocked" it
+ * may name the blocker. Thread-safe. */
+bool accel_cross(const struct accel *a, const struct ray *r, const struct accel_cross_filter *f,
+		 struct accel_crossings *x, uint32_t *hint);
+/* accel_cross of four rays at once (open[i] and x[i] are what it gives
+ * r[i], bit for bit), sharing one hint: faster for neighbours, as the
+ * shadow rays of a 2x2 block toward one light are. Thread-safe. */
+void accel_cross4(const struct accel *a, const struct ray r[4], const struct accel_cross_filter *f,
+		  struct accel_crossings x[4], bool open[4], uint32_t *hint);
+
+/*
  * Start point for a secondary ray leaving a hit at p (geometric normal ng)
  * in direction dir: p moved off the surface along ng, to the side dir
  * leaves by, by 1e-9 * (1 + max |p_i|). Use it with tmin = 0 to avoid

@@ -850,6 +850,155 @@ static void group_occluded4(const struct accel *A, const struct group *g, struct
 	if (active == 15)
 		*hint = ACCEL_NO_HINT; /* as accel_occluded_hint */
 }
+
+/*
+ * accel_cross4's traversal (SHADOW CROSSINGS, accel_cross.c): the tree as
+ * bvh_occluded4 walks it, each ray tested for what it meets, with
+ * accel_cross's tests; a ray is dropped (its bit cleared from *active) when
+ * it is blocked. Q[i] is ray i's query.
+ */
+static inline __attribute__((always_inline)) void bvh_cross4(const struct group *g, struct trace tr[4],
+							     unsigned *active, const struct ray4x *P,
+							     const uint32_t oct, const struct cross_query Q[4])
+{
+	const struct bvh4 *nodes = g->bvh.nodes;
+	const uint32_t near[3] = { 12 * (oct & 1), 4 + 12 * (oct >> 1 & 1), 8 + 12 * (oct >> 2 & 1) };
+	const uint32_t far[3] = { 12 * (~oct & 1), 4 + 12 * (~oct >> 1 & 1), 8 + 12 * (~oct >> 2 & 1) };
+	const __m128 tmin4 = lanes_box_tmin(tr, P->tscale), tmax4 = lanes_box_tmax(tr, P->tscale);
+	struct {
+		uint32_t idx, n;
+		unsigned lanes; /* the rays that met the subtree's box */
+	} stack[3 * BVH_MAX_DEPTH + 4];
+	int sp = 0;
+	unsigned act = *active, lanes = act;
+	uint32_t idx = 0, n = 0;
+	uint32_t polls = ACCEL_POLL_POPS;
+	struct tri4 q; /* TRIANGLE PRE-TEST, set up at the first block two rays meet */
+	bool q_ready = false;
+	for (;;) {
+		if (n & LEAF_BLOCK) {
+			const float *tb = &g->tblk[idx];
+			uint32_t nt = n & ~LEAF_BLOCK;
+			for (uint32_t k = 0; k < nt && (lanes &= act); k++) {
+				uint32_t ref = blk_ref(tb, nt, k);
+				unsigned test = lanes;
+				if (test & (test - 1)) {
+					if (!q_ready) {
+						tri4_init(&q, tr);
+						q_ready = true;
+					}
+					if (q.ok)
+						test &= ~tri4_reject(&q, tb, nt, k);
+				}
+				for (unsigned l = test; l; l &= l - 1) {
+					int i = __builtin_ctz(l);
+					if (!cross_tri(&Q[i], g, ref, &tr[i], NULL))
+						act &= ~(1u << i);
+				}
+			}
+			if (!act)
+				break;
+		} else if (n) {
+			for (uint32_t k = 0; k < n && (lanes &= act); k++) {
+				uint32_t ref = group_ref(g, idx + k);
+				for (unsigned l = lanes; l; l &= l - 1) {
+					int i = __builtin_ctz(l);
+					if (!accel_cross_ref(&Q[i], g, ref, &tr[i], NULL))
+						act &= ~(1u << i);
+				}
+			}
+			if (!act)
+				break;
+		} else {
+			const struct bvh4 *nd = &nodes[idx];
+			const float *b = (const float *)(const void *)nd; /* rows as in node4_hit */
+			unsigned m[4];
+			for (int c = 0; c < 4; c++) { /* bvh_occluded4's test */
+				__m128 t0 = tmin4, t1 = tmax4;
+				for (int k = 0; k < 3; k++) {
+					__m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[near[k] + (uint32_t)c]), P->o[k]),
+							       P->inv_near[k]);
+					__m128 tf = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[far[k] + (uint32_t)c]), P->o[k]),
+							       P->inv_far[k]);
+					t0 = _mm_max_ps(t0, tn);
+					t1 = _mm_min_ps(t1, tf);
+				}
+				m[c] = (unsigned)_mm_movemask_ps(_mm_cmple_ps(t0, t1)) & act;
+			}
+			int first = -1;
+			for (int c = 3; c >= 0; c--) {
+				if (!m[c])
+					continue;
+				if (first >= 0) {
+					stack[sp].idx = nd->idx[first];
+					stack[sp].n = nd->n[first];
+					stack[sp++].lanes = m[first];
+				}
+				first = c;
+			}
+			if (first >= 0) {
+				idx = nd->idx[first];
+				n = nd->n[first];
+				lanes = m[first];
+				continue;
+			}
+		}
+		if (__builtin_expect(--polls == 0, 0)) { /* CANCELLATION, as bvh_hit */
+			polls = ACCEL_POLL_POPS;
+			if (cancel_poll())
+				break;
+		}
+		for (;;) { /* pop the next subtree some ray still open meets */
+			if (sp == 0)
+				goto out;
+			sp--;
+			if (stack[sp].lanes & act)
+				break;
+		}
+		idx = stack[sp].idx;
+		n = stack[sp].n;
+		lanes = stack[sp].lanes;
+	}
+out:
+	*active = act;
+}
+
+/* accel_cross4's packet query in g (as group_occluded4's) for four rays
+ * of one octant: the hint and the unbounded references ray by ray, then
+ * the tree for the rays still open. */
+static void group_cross4(const struct group *g, struct trace tr[4], uint32_t oct, const struct cross_query Q[4],
+			 bool open[4])
+{
+	unsigned active = 0;
+	for (int i = 0; i < 4; i++) {
+		bool blocked = cross_hint_blocks(&Q[i], g, &tr[i]);
+		for (uint32_t k = 0; k < g->n_unb && !blocked; k++) {
+			if (cancel_poll_every(k))
+				break;
+			blocked = !accel_cross_ref(&Q[i], g, g->unb[k], &tr[i], NULL);
+		}
+		active |= (unsigned)!blocked << i;
+	}
+	if (active) {
+		struct ray4x P;
+		ray4x_init(&P, tr, g);
+		switch (oct) { /* one copy of the loop per octant, as group_hit */
+		case 0: bvh_cross4(g, tr, &active, &P, 0, Q); break;
+		case 1: bvh_cross4(g, tr, &active, &P, 1, Q); break;
+		case 2: bvh_cross4(g, tr, &active, &P, 2, Q); break;
+		case 3: bvh_cross4(g, tr, &active, &P, 3, Q); break;
+		case 4: bvh_cross4(g, tr, &active, &P, 4, Q); break;
+		case 5: bvh_cross4(g, tr, &active, &P, 5, Q); break;
+		case 6: bvh_cross4(g, tr, &active, &P, 6, Q); break;
+		default: bvh_cross4(g, tr, &active, &P, 7, Q); break;
+		}
+	}
+	for (int i = 0; i < 4; i++) {
+		open[i] = active >> i & 1;
+		if (open[i])
+			accel_cross_sort(Q[i].X);
+	}
+}
 #endif
 
 /* ---- public queries ----------------------------------------------------------------- */
@@ -931,4 +1080,23 @@ void accel_occluded4(const struct accel *a, const struct ray r[4], bool occ[4], 
 #endif
 	for (int i = 0; i < 4; i++) /* rays of different octants, a root without a tree */
 		occ[i] = accel_occluded_hint(a, &r[i], hint);
+}
+
+void accel_cross4(const struct accel *a, const struct ray r[4], const struct accel_cross_filter *f,
+		  struct accel_crossings x[4], bool open[4], uint32_t *hint)
+{
+#if defined(__SSE2__)
+	struct trace tr[4];
+	uint32_t oct;
+	if (packet_start(a, r, tr, &oct)) {
+		const struct cross_query Q[4] = { { a, f, &x[0], hint }, { a, f, &x[1], hint }, { a, f, &x[2], hint },
+						  { a, f, &x[3], hint } };
+		for (int i = 0; i < 4; i++)
+			x[i].n = 0;
+		group_cross4(a->root, tr, oct, Q, open);
+		return;
+	}
+#endif
+	for (int i = 0; i < 4; i++) /* rays of different octants, a root without a tree */
+		open[i] = accel_cross(a, &r[i], f, &x[i], hint);
 }

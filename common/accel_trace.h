@@ -154,6 +154,10 @@ bool accel_xprim_occludes(const struct xprim *x, const struct trace *r);
 bool accel_ref_test_slow(const struct accel *A, const struct group *g, uint32_t ref, struct trace *r,
 			 struct cand *c, bool brute);
 bool accel_inst_occluded(const struct accel *A, const struct ginst *in, const struct trace *r);
+/* The parent-space hit h (but h->p and h->surf_fn) of hit lh (completed
+ * here) in the define's group of instance si, whose inverse is inv. */
+void accel_inst_to_parent(const struct accel *A, const struct scene_inst *si, const mat34 *inv, struct hit *lh,
+			  struct hit *h);
 bool accel_unb_hit(const struct accel *A, const struct group *g, struct trace *r, struct cand *best,
 		   bool brute);
 void accel_finish(const struct accel *A, const struct group *g, const struct trace *r, const struct cand *c,
@@ -624,6 +628,96 @@ static inline __attribute__((always_inline)) int children_by_entry(int m, const 
 		cs[j] = c;
 	}
 	return k;
+}
+
+/* ---- SHADOW CROSSINGS (accel_cross.c, accel_packet.c) ------------------------------- */
+
+/* A query's filter, list and hint (accel_cross, accel_cross4). */
+struct cross_query {
+	const struct accel *A;
+	const struct accel_cross_filter *f;
+	struct accel_crossings *X;
+	uint32_t *hint;
+};
+
+/* An instance the query went into: its define's group is searched with
+ * the ray in the define's space, so a hit found there goes back up the
+ * levels to the world (accel_inst_to_parent), and takes its tie key from
+ * the references it came through: the instance's at the root (high 32
+ * bits), the reference's within the first define (low 32), and below
+ * that the first define's reference's alone. */
+struct cross_level {
+	const struct cross_level *up; /* NULL: this instance is the root group's */
+	const struct trace *pr;       /* the ray in the parent's space */
+	const struct scene_inst *si;
+	mat34 inv;
+	int depth; /* 1: the root group's instance */
+	uint64_t key;
+};
+
+/* A material known only from the hit (CSG: its operands'). */
+#define CROSS_MAT_UNKNOWN (UINT32_MAX - 1)
+
+/* Whether material m (SCENE_NONE or beyond: the default) is opaque everywhere. */
+static inline bool cross_opaque(const struct accel_cross_filter *f, uint32_t m)
+{
+	return f->opaque[m < f->n_materials ? m : f->n_materials] != 0;
+}
+
+/* Candidate c (ref, key, t and what accel_finish reads) of group g on r at
+ * level lv (NULL: the root group), material mat (SCENE_NONE: the
+ * instance's, CROSS_MAT_UNKNOWN: the hit's): false when it blocks the
+ * segment (opaque, or the list is full), else its entry made. */
+bool accel_cross_emit(const struct cross_query *Q, const struct group *g, const struct trace *r,
+		      const struct cand *c, uint32_t mat, const struct cross_level *lv);
+/* Every crossing of reference ref of g on r (r->tmax is kept): false when
+ * one blocks the segment. */
+bool accel_cross_ref(const struct cross_query *Q, const struct group *g, uint32_t ref, struct trace *r,
+		     const struct cross_level *lv);
+/* X->x in order of t (the entries' t differ). */
+void accel_cross_sort(struct accel_crossings *X);
+
+/* accel_cross_ref of a triangle. */
+static inline __attribute__((always_inline)) bool cross_tri(const struct cross_query *Q, const struct group *g,
+							     uint32_t ref, struct trace *r,
+							     const struct cross_level *lv)
+{
+	const struct gtri *gt = &g->tri[REF_IDX(ref)];
+	const struct gmesh *m = &g->mesh[gt->mesh];
+	const uint32_t *ix = tri_ix(m, gt->tri);
+	const struct geom_wray *w = trace_wray(r);
+	struct cand c;
+	if (tri_flat_behind(g, REF_IDX(ref), w, &m->v[ix[0]], r->tmin) ||
+	    !geom_tri_hit_p(w, &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &c.t, &c.b1, &c.b2))
+		return true;
+	if (!lv && cross_opaque(Q->f, m->mat)) {
+		*Q->hint = ref;
+		return false;
+	}
+	c.ref = c.key = ref;
+	c.part = GEOM_PART_MAIN;
+	return accel_cross_emit(Q, g, r, &c, m->mat, lv);
+}
+
+/* Whether the hint, a reference of the root group g whose material is
+ * opaque everywhere, blocks r. */
+static inline bool cross_hint_blocks(const struct cross_query *Q, const struct group *g, struct trace *r)
+{
+	uint32_t h = *Q->hint, i = REF_IDX(h);
+	if (h == ACCEL_NO_HINT || !ref_valid(g, h))
+		return false;
+	uint32_t mat;
+	switch (REF_KIND(h)) {
+	case REF_SPHERE: mat = g->sph[i].mat; break;
+	case REF_TRI: mat = g->mesh[g->tri[i].mesh].mat; break;
+	case REF_XPRIM:
+		if (g->xp[i].r <= 0 && g->xp[i].g->kind == PRIM_CSG)
+			return false;
+		mat = g->xp[i].mat;
+		break;
+	default: return false;
+	}
+	return cross_opaque(Q->f, mat) && ref_occludes(Q->A, g, h, r);
 }
 
 #endif

@@ -52,8 +52,11 @@ int renderer_set_size(struct renderer *r, uint32_t w, uint32_t h);
  * pixels differ, so that the farm's build check (proto_build_id) keeps
  * builds that draw different pixels apart even at one version number.
  * 2: canonical ties between coincident surfaces (docs/language.md).
+ * 3: shadow rays through transparent surfaces take every surface on the
+ *    straight segment to the light (SHADOW CROSSINGS, accel.h), where they
+ *    stepped from hit to hit, each step offset and aimed anew.
  */
-#define RENDER_PIXEL_REV 2
+#define RENDER_PIXEL_REV 3
 
 /*
  * What a tile's pixels are: chosen per render from the output format (the

@@ -59,7 +59,7 @@ struct shade_ctx {
 	/* PLAIN MATERIALS: shader_eval's result (but n) for each of the first
 	 * SHADE_PLAIN materials without a shader (bit i of plain_ok) and for the
 	 * default material, made once: shading points and the surfaces a shadow
-	 * walk crosses (twalk_cross) point at them */
+	 * ray crosses (cross_pass) point at them */
 	uint64_t plain_ok;
 	struct shader_mat plain[SHADE_PLAIN], plain_default;
 	/* TRANSPARENT BOXES: when tbox_all, every surface whose material may be
@@ -69,6 +69,10 @@ struct shade_ctx {
 	struct {
 		vec3 c, e; /* centre and half-size */
 	} tbox[SHADE_TBOXES];
+	/* SHADOW CROSSINGS' filter: cross_pass, and the materials without a
+	 * shader whose transparency is 0 (opaque[n_materials]: the default) */
+	uint8_t *opaque;
+	struct accel_cross_filter cross;
 };
 
 /*
@@ -140,8 +144,8 @@ static uint32_t *light_hint(const struct shade_ctx *c, uint32_t i, uint32_t obj)
  */
 #define SHADE_PRE_LIGHTS 32
 /* In scenes with transparent materials, the transmittances of the shadow
- * rays toward the first SHADE_PRE_TLIGHTS point lights, walked in packets
- * (walk_packet). */
+ * rays toward the first SHADE_PRE_TLIGHTS point lights, found in packets
+ * (cross_packet). */
 #define SHADE_PRE_TLIGHTS 8
 /* The way from a hit point p (shading normal n) to a point light lp, as
  * direct() finds it: dist = |lp - p|; when dist > 0, the unit direction
@@ -378,6 +382,8 @@ static bool may_cross_transparent(const struct shade_ctx *c, const struct ray *r
 	return false;
 }
 
+static bool cross_pass(const void *ctx, struct hit *h, struct accel_pass *p);
+
 int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx **out,
 		  struct scene_error *err)
 {
@@ -423,6 +429,16 @@ int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx
 		}
 	shader_eval(s, SCENE_NONE, &origin, &c->plain_default);
 	tbox_boxes(c);
+	if (!(c->opaque = calloc((size_t)s->n_materials + 1, 1)))
+		goto oom;
+	for (uint32_t i = 0; i <= s->n_materials; i++) {
+		struct shader_mat m;
+		if (i < s->n_materials && s->materials[i].shader.kind != SHADER_NONE)
+			continue;
+		shader_eval(s, i < s->n_materials ? i : SCENE_NONE, &origin, &m);
+		c->opaque[i] = !(fmin(m.transparency, 1.0) > 0); /* cross_pass's test */
+	}
+	c->cross = (struct accel_cross_filter){ c->opaque, s->n_materials, cross_pass, c };
 	*out = c;
 	return 0;
 oom:
@@ -435,6 +451,7 @@ void shade_ctx_free(struct shade_ctx *c)
 	if (!c)
 		return;
 	free(c->lights);
+	free(c->opaque);
 	free(c);
 }
 
@@ -543,27 +560,16 @@ static void need_surface(const struct shade_ctx *c, struct hit *h)
 }
 
 /*
- * A shadow ray's walk toward its light through transparent surfaces
- * (transmittance): the segment still ahead, the light let through so far
- * and the surfaces crossed. Alone (twalk_next) or four in step
- * (walk_packet), a walk crosses each closest hit with twalk_cross, so its
- * answer is the same bit for bit.
+ * A shadow ray's way to its light through transparent surfaces: every
+ * surface on the segment, in order (SHADOW CROSSINGS, accel_cross), each
+ * letting through transparency x tran-colour of its material there
+ * (cross_pass, the filter's callback), or nothing when it is opaque.
  */
-struct twalk {
-	struct ray r;
-	vec3 t;
-	int n;
-};
+_Static_assert(LIM_SHADOW_HITS <= ACCEL_CROSS_MAX, "a list holds every crossing the light may pass");
 
-/* Walk w crosses hit h, the closest of its segment (NULL: nothing is
- * there): true when the walk ends, its answer in *out; else w goes on
- * past h toward lp. */
-static bool twalk_cross(const struct shade_ctx *c, struct twalk *w, struct hit *h, vec3 lp, vec3 *out)
+static bool cross_pass(const void *ctx, struct hit *h, struct accel_pass *p)
 {
-	if (!h) {
-		*out = w->t;
-		return true;
-	}
+	const struct shade_ctx *c = ctx;
 	struct shader_mat own;
 	const struct shader_mat *m = plain_mat(c, h->material); /* PLAIN MATERIALS */
 	if (!m) {
@@ -573,56 +579,45 @@ static bool twalk_cross(const struct shade_ctx *c, struct twalk *w, struct hit *
 		m = &own;
 	}
 	double td = fmin(m->transparency, 1.0);
-	*out = v3(0, 0, 0);
 	if (!(td > 0))
-		return true;
-	w->t = v3_scale(v3_mul(w->t, v3_max(m->tran_colour, v3(0, 0, 0))), td);
-	if (maxc(w->t) < SHADE_MIN_WEIGHT || ++w->n >= LIM_SHADOW_HITS)
-		return true;
-	w->r.o = offset(h->p, h->ng, w->r.d);
-	w->r.d = v3_sub(lp, w->r.o);
-	return false;
+		return false;
+	p->col = v3_max(m->tran_colour, v3(0, 0, 0));
+	p->td = td;
+	return true;
 }
 
-/* The answer of walk w whose segment meets no transparent surface
- * (TRANSPARENT BOXES, or a scene without any): an any-hit query, with
- * light i's hint for object obj. */
-static vec3 twalk_end(const struct shade_ctx *c, const struct twalk *w, uint32_t i, uint32_t obj)
+/* The light an open segment's crossings x let through: their product in
+ * order along the segment, 0 once it falls below SHADE_MIN_WEIGHT or at
+ * the LIM_SHADOW_HITS-th surface. */
+static vec3 crossings_light(const struct accel_crossings *x)
 {
-	return accel_occluded_light(c->a, i, &w->r, light_hint(c, i, obj)) ? v3(0, 0, 0) : w->t;
-}
-
-/* One step of walk w alone; twalk_cross's result. */
-static bool twalk_next(const struct shade_ctx *c, struct twalk *w, vec3 lp, uint32_t i, uint32_t obj, vec3 *out)
-{
-	if (!may_cross_transparent(c, &w->r)) {
-		*out = twalk_end(c, w, i, obj);
-		return true;
+	vec3 t = v3(1, 1, 1);
+	for (int k = 0; k < x->n; k++) {
+		t = v3_scale(v3_mul(t, x->x[k].p.col), x->x[k].p.td);
+		if (maxc(t) < SHADE_MIN_WEIGHT || k + 1 >= LIM_SHADOW_HITS)
+			return v3(0, 0, 0);
 	}
-	struct hit h;
-	return twalk_cross(c, w, accel_intersect(c->a, &w->r, &h) ? &h : NULL, lp, out);
+	return t;
 }
 
 /*
  * How much light passes from o to the point lp (light i; obj: the object
  * hit, for the hint): (1,1,1) when nothing is in the way, 0 when something
  * opaque is; each transparent surface crossed multiplies it by
- * transparency x tran-colour. pre may know it from a packet's walk.
+ * transparency x tran-colour. pre may know it from a packet's crossings.
+ * A segment that meets no transparent surface (TRANSPARENT BOXES) needs
+ * only the any-hit query.
  */
 static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp, uint32_t light, const struct shadow_pre *pre,
 			  uint32_t obj)
 {
-	struct twalk w = { { o, v3_sub(lp, o), 0, 1 }, v3(1, 1, 1), 0 };
-	if (!c->any_transparent)
-		return twalk_end(c, &w, light, obj);
-	if (pre && light < SHADE_PRE_TLIGHTS && (pre->tknown >> light & 1))
+	struct ray r = { o, v3_sub(lp, o), 0, 1 };
+	if (c->any_transparent && pre && light < SHADE_PRE_TLIGHTS && (pre->tknown >> light & 1))
 		return pre->tval[light];
-	vec3 out;
-	do {
-		if (w.n && cancel_poll()) /* CANCELLATION: shaders may be costly */
-			return v3(0, 0, 0);
-	} while (!twalk_next(c, &w, lp, light, obj, &out));
-	return out;
+	if (!c->any_transparent || !may_cross_transparent(c, &r))
+		return accel_occluded_light(c->a, light, &r, light_hint(c, light, obj)) ? v3(0, 0, 0) : v3(1, 1, 1);
+	struct accel_crossings x;
+	return accel_cross(c->a, &r, &c->cross, &x, light_hint(c, light, obj)) ? crossings_light(&x) : v3(0, 0, 0);
 }
 
 /* The largest |channel|, or NaN when a channel is NaN or infinite (0 * it is NaN). */
@@ -1106,69 +1101,17 @@ static void shadow_packets(const struct shade_ctx *c, const struct surf sf[4], c
 	}
 }
 
-/*
- * transmittance() of four shadow rays r[j] of one octant toward light i
- * (at lp) as four walks in step, into t[j]: their first closest hits as
- * one packet; then each round, the walks still going that may meet a
- * transparent surface go together when they are two or more of one octant
- * (accel_intersect4, lanes past them repeating the last), else one by one;
- * the walks whose segments meet none end in any-hit queries, as one
- * packet when they are two or more (accel_occluded4, with the first's
- * hint; obj[j]: the object walk j starts from).
- */
-static void walk_packet(const struct shade_ctx *c, const struct ray r[4], vec3 lp, uint32_t i, const uint32_t obj[4],
-			vec3 t[4])
+/* transmittance() of four shadow rays r[j] of one octant toward light i,
+ * as one packet of crossings (accel_cross4), into t[j]; obj[j]: the object
+ * ray j starts from (the first's names the hint). */
+static void cross_packet(const struct shade_ctx *c, const struct ray r[4], uint32_t i, const uint32_t obj[4],
+			 vec3 t[4])
 {
-	struct twalk w[4];
-	int who[4], m = 4;
-	for (int j = 0; j < 4; j++) {
-		w[j] = (struct twalk){ r[j], v3(1, 1, 1), 0 };
-		who[j] = j;
-	}
-	for (;;) {
-		struct ray pr[4];
-		struct hit hh[4];
-		bool hit[4];
-		bool one = m >= 2;
-		unsigned oct = octant(w[who[0]].r.d);
-		for (int k = 0; k < m; k++) {
-			pr[k] = w[who[k]].r;
-			one &= octant(pr[k].d) == oct;
-		}
-		closest_hits(c, pr, m, one, hh, hit);
-		int q = 0; /* the walks going on */
-		for (int k = 0; k < m; k++) {
-			int j = who[k];
-			if (!twalk_cross(c, &w[j], hit[k] ? &hh[k] : NULL, lp, &t[j]))
-				who[q++] = j;
-		}
-		if (q && cancel_poll()) { /* CANCELLATION */
-			for (int k = 0; k < q; k++)
-				t[who[k]] = v3(0, 0, 0);
-			return;
-		}
-		m = 0;
-		int ends[4], e = 0; /* the walks whose segments meet no transparent surface */
-		for (int k = 0; k < q; k++) {
-			if (may_cross_transparent(c, &w[who[k]].r))
-				who[m++] = who[k];
-			else
-				ends[e++] = who[k];
-		}
-		if (e >= 2) { /* their any-hit queries as one packet */
-			for (int k = 0; k < e; k++)
-				pr[k] = w[ends[k]].r;
-			pad_packet(pr, e);
-			bool occ[4];
-			accel_occluded4(c->a, pr, occ, light_hint(c, i, obj[ends[0]]));
-			for (int k = 0; k < e; k++)
-				t[ends[k]] = occ[k] ? v3(0, 0, 0) : w[ends[k]].t;
-		} else if (e) {
-			t[ends[0]] = twalk_end(c, &w[ends[0]], i, obj[ends[0]]);
-		}
-		if (!m)
-			return;
-	}
+	struct accel_crossings x[4];
+	bool open[4];
+	accel_cross4(c->a, r, &c->cross, x, open, light_hint(c, i, obj[0]));
+	for (int j = 0; j < 4; j++)
+		t[j] = open[j] ? crossings_light(&x[j]) : v3(0, 0, 0);
 }
 
 /*
@@ -1176,13 +1119,12 @@ static void walk_packet(const struct shade_ctx *c, const struct ray r[4], vec3 l
  * BOXES), for hits at any depth (depth: the hits', for the hints): a block
  * whose rays toward a light all miss the boxes is traced with
  * accel_occluded4 as above; one where some ray may cross a transparent
- * surface, as four walks in step (walk_packet) when it is a whole packet
- * of one octant, and otherwise the rays that miss the boxes alone, the
- * others left to direct(). The walks run whether or not direct() will
- * need their answers (it skips a light whose term is too faint to count);
- * walking them all still paid: gears_s2 -8.6% against packets for the
- * first hits alone, the walks going on one by one (docs/performance.md,
- * round 11).
+ * surface, as one packet of crossings (cross_packet) when it is a whole
+ * packet of one octant, and otherwise the rays that miss the boxes alone,
+ * the others left to direct(). The crossings are found whether or not
+ * direct() will need them (it skips a light whose term is too faint to
+ * count); finding them all in packets paid (gears_s2 -8.6% in round 11,
+ * when they were walks, docs/performance.md).
  */
 static void shadow_packets_transparent(const struct shade_ctx *c, const struct surf sf[4], const bool ok[4], int n,
 				       int depth, struct shadow_pre pre[4])
@@ -1205,7 +1147,7 @@ static void shadow_packets_transparent(const struct shade_ctx *c, const struct s
 			uint32_t obj[4];
 			for (int j = 0; j < 4; j++)
 				obj[j] = depth ? sf[who[j]].obj : SHADE_HINT_ANY;
-			walk_packet(c, r, l->position, i, obj, t);
+			cross_packet(c, r, i, obj, t);
 			for (int j = 0; j < 4; j++) {
 				pre[who[j]].tknown |= 1u << i;
 				pre[who[j]].tval[i] = t[j];

@@ -1,8 +1,8 @@
 /*
  * test_shade.c - the lighting equation, term by term, on hand-made geometry.
  *
- * This test supplies its own accel_intersect, accel_occluded and
- * accel_offset_point over a few analytic spheres and planes (so the linker
+ * This test supplies its own accel_intersect, accel_occluded, accel_cross
+ * and accel_offset_point over a few analytic spheres and planes (so the linker
  * never pulls in the real accel), records every ray the shader casts, and checks the colours and
  * the rays against values computed by hand from docs/rendering.md.
  */
@@ -129,6 +129,49 @@ void accel_intersect4(const struct accel *a, const struct ray r[4], struct hit h
 {
 	for (int i = 0; i < 4; i++)
 		hit[i] = accel_intersect(a, &r[i], &h[i]);
+}
+
+/* Every crossing of r's segment (accel.h, SHADOW CROSSINGS): each
+ * primitive's hits in turn (a sphere's two), one entry per t, in order of t;
+ * the mock's key is the primitive's index. */
+bool accel_cross(const struct accel *a, const struct ray *r, const struct accel_cross_filter *f,
+		 struct accel_crossings *x, uint32_t *hint)
+{
+	(void)hint;
+	x->n = 0;
+	for (int i = 0; i < a->n; i++) {
+		struct ray rr = *r;
+		struct hit h;
+		while (prim_hit(&a->p[i], &rr, &h)) {
+			struct accel_pass p;
+			uint32_t m = h.material;
+			if (f->opaque[m < f->n_materials ? m : f->n_materials] || !f->pass(f->ctx, &h, &p))
+				return false;
+			int k = 0;
+			while (k < x->n && x->x[k].t != h.t)
+				k++;
+			if (k == x->n) {
+				if (x->n == ACCEL_CROSS_MAX)
+					return false;
+				x->x[x->n++] = (struct accel_crossing){ h.t, (uint64_t)i, p };
+			}
+			rr.tmin = h.t;
+		}
+	}
+	for (int k = 1; k < x->n; k++)
+		for (int j = k; j > 0 && x->x[j - 1].t > x->x[j].t; j--) {
+			struct accel_crossing e = x->x[j];
+			x->x[j] = x->x[j - 1];
+			x->x[j - 1] = e;
+		}
+	return true;
+}
+
+void accel_cross4(const struct accel *a, const struct ray r[4], const struct accel_cross_filter *f,
+		  struct accel_crossings x[4], bool open[4], uint32_t *hint)
+{
+	for (int i = 0; i < 4; i++)
+		open[i] = accel_cross(a, &r[i], f, &x[i], hint);
 }
 
 /* The same offset as the real accel's (accel.h). */

@@ -1,0 +1,299 @@
+/*
+ * test_cross.c - SHADOW CROSSINGS (accel_cross, accel_cross4): every
+ * surface a segment crosses, in order, one entry per t, blocked by any
+ * opaque one.
+ *
+ * - Against a reference walk along the same ray (accel_intersect, then
+ *   again from the hit's t, and so on), on random segments through a scene
+ *   of every primitive kind in glass: spheres (two crossings each),
+ *   triangles, a box, cylinders, a disk, a polygon, CSG, a glass plane (an
+ *   unbounded reference), instances of a define (members inheriting the
+ *   instance's material, one nested a level deeper), a chequered sphere
+ *   whose squares are glass and opaque (the filter's callback decides),
+ *   and opaque spheres; once with the opaque materials in the filter's
+ *   table, once with the callback answering for them.
+ * - Packets (accel_cross4) give every ray what accel_cross gives it, bit
+ *   for bit, keys included.
+ * - The list's bounds: 64 crossings fit, a 65th blocks; surfaces at one t
+ *   count once, the first written's; an opaque one there blocks.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "common/accel.h"
+#include "common/parse.h"
+#include "common/rng.h"
+#include "common/shader.h"
+#include "tests/unit/check.h"
+
+static const char SCENE[] =
+	"define material named ga colour (1 0.8 0.6) transparency 0.9 ; ;\n"
+	"define material named gb colour (0.5 1 0.7) transparency 0.6 ; ;\n"
+	"define material named dark colour (0.3 0.3 0.3) ; ;\n"
+	"define material named chq chequers size 0.25\n"
+	"    material-a material colour (1 1 0.5) transparency 0.8 ; material-b material colour (0 0 1) ; ; ; ;\n"
+	"define object name lens\n"
+	"    object sphere radius 0.4 ; material called gb ; ;\n"
+	"    object box a (-0.2 -0.2 -0.2) b (0.2 0.2 0.2) ; translate (0.6 0 0) ;\n"
+	"    object triangle a (0 0 0) b (0.5 0 0) c (0 0.5 0.2) ; ;\n"
+	"; ;\n"
+	"define object name pair object lens ; ; object lens ; y-rotate 90 translate (0 0.9 0) ; ; ;\n"
+	"object sphere centre (-1 0 0) radius 0.7 ; material called ga ; ;\n"
+	"object sphere centre (1.2 0.4 -0.5) radius 0.5 ; material called gb ; ;\n"
+	"object sphere centre (0 1.5 0.5) radius 0.3 ; x-rotate 30 stretch-y 1.5 material called ga ; ;\n"
+	"object sphere centre (0.3 -1.2 0.8) radius 0.45 ; material called chq ; ;\n"
+	"object sphere centre (1.5 -1.5 -1) radius 0.3 ; material called dark ; ;\n"
+	"object sphere centre (-1.6 1.4 -0.8) radius 0.35 ; ;\n"
+	"object triangle a (-2 -2 1.5) b (2 -2 1.6) c (0 2 1.4) ; material called gb ; ;\n"
+	"object triangle a (-2 2 -1.5) b (2 2 -1.6) c (0 -2 -1.4) ; material called ga ; ;\n"
+	"object box a (0.5 0.5 0.5) b (1.2 1.1 0.9) ; z-rotate 20 material called ga ; ;\n"
+	"object cylinder from (-1.5 -1 -1) to (1.5 -0.5 0.2) radius 0.2 capped ; material called gb ; ;\n"
+	"object cylinder from (-0.5 -2 0.5) to (-0.3 2 0.4) radius 0.25 ; material called ga ; ;\n"
+	"object disk position (0.8 -0.6 0) normal (1 1 0.3) radius 0.5 ; material called gb ; ;\n"
+	"object polygon contour (-1 0 -1.2) (0 0.3 -1.2) (-0.3 0.6 -1.2) (-1 1 -1.2) ; ; material called ga ; ;\n"
+	"object csg operand1 object sphere centre (0 0 -0.6) radius 0.6 ; ;\n"
+	"    operand2 object box a (-0.4 -0.4 -1.4) b (0.4 0.4 -0.2) ; ; intersect ; material called gb ; ;\n"
+	"object plane position (0 -2.6 0) normal (0 1 0.1) ; material called ga ; ;\n"
+	"object lens ; translate (-0.5 0.2 0.9) material called ga ; ;\n"
+	"object pair ; x-rotate 40 translate (1.4 -0.2 1) material called gb ; ;\n"
+	"object lens ; z-rotate 70 translate (-1.2 -1.1 0.3) ;\n";
+
+static const struct scene *S;
+
+/* The test's filter: the material's transparency and tran-colour at the
+ * hit (shaders evaluated there), as shading's. */
+static bool pass(const void *ctx, struct hit *h, struct accel_pass *p)
+{
+	const struct accel *a = ctx;
+	accel_hit_surface(a, h);
+	struct shader_point pt = { h->mp, h->u, h->v, h->n };
+	struct shader_mat m;
+	shader_eval(S, h->material, &pt, &m);
+	double td = fmin(m.transparency, 1.0);
+	if (!(td > 0))
+		return false;
+	p->col = v3_max(m.tran_colour, v3(0, 0, 0));
+	p->td = td;
+	return true;
+}
+
+/* The reference: closest hit after closest hit along the same ray. */
+static bool walk(const struct accel *a, const struct ray *r, const struct accel_cross_filter *f,
+		 struct accel_crossings *x)
+{
+	struct ray q = *r;
+	x->n = 0;
+	struct hit h;
+	while (accel_intersect(a, &q, &h)) {
+		struct accel_pass p;
+		if (!f->pass(f->ctx, &h, &p) || x->n == ACCEL_CROSS_MAX)
+			return false;
+		x->x[x->n++] = (struct accel_crossing){ h.t, 0, p };
+		q.tmin = h.t;
+	}
+	return true;
+}
+
+static bool same_pass(const struct accel_pass *a, const struct accel_pass *b)
+{
+	return memcmp(&a->col, &b->col, sizeof a->col) == 0 && memcmp(&a->td, &b->td, sizeof a->td) == 0;
+}
+
+/* x and y alike; with keys too when keys. */
+static bool same_list(bool oa, const struct accel_crossings *x, bool ob, const struct accel_crossings *y, bool keys)
+{
+	if (oa != ob)
+		return false;
+	if (!oa)
+		return true;
+	if (x->n != y->n)
+		return false;
+	for (int k = 0; k < x->n; k++)
+		if (x->x[k].t != y->x[k].t || !same_pass(&x->x[k].p, &y->x[k].p) || (keys && x->x[k].key != y->x[k].key))
+			return false;
+	return true;
+}
+
+static vec3 rand_point(uint64_t seed, uint64_t k, double ext)
+{
+	return v3(ext * (2 * rng_uniform(seed, 3 * k) - 1), ext * (2 * rng_uniform(seed, 3 * k + 1) - 1),
+		  ext * (2 * rng_uniform(seed, 3 * k + 2) - 1));
+}
+
+static void against_walk(const struct accel *a, const struct accel_cross_filter *f, uint64_t seed)
+{
+	int n = 4000, bad = 0, bad4 = 0, open = 0, many = 0;
+	static struct accel_crossings x, y, x4[4];
+	for (int k = 0; k < n; k++) {
+		/* four neighbouring segments toward one light point */
+		vec3 o = rand_point(seed, 2 * (uint64_t)k, 3), lp = rand_point(seed, 2 * (uint64_t)k + 1, 4);
+		struct ray r[4];
+		for (int j = 0; j < 4; j++) {
+			vec3 oj = v3_add(o, v3(0.01 * (j & 1), 0.01 * (j >> 1), 0.003 * j));
+			r[j] = (struct ray){ oj, v3_sub(lp, oj), 0, 1 };
+		}
+		uint32_t hint = ACCEL_NO_HINT, hint4 = ACCEL_NO_HINT;
+		bool o4[4];
+		accel_cross4(a, r, f, x4, o4, &hint4);
+		for (int j = 0; j < 4; j++) {
+			bool oc = accel_cross(a, &r[j], f, &x, &hint);
+			bool ow = walk(a, &r[j], f, &y);
+			bad += !same_list(oc, &x, ow, &y, false);
+			bad4 += !same_list(o4[j], &x4[j], oc, &x, true);
+			open += oc;
+			many += oc && x.n >= 3;
+		}
+	}
+	printf("  %d segments: %d open, %d of them through 3 or more surfaces\n", 4 * n, open, many);
+	CHECK(bad == 0);
+	CHECK(bad4 == 0);
+	/* the scene does what it is for: some segments pass, some through several */
+	CHECK(open > 400 && many > 100);
+	CHECK(4 * n - open > 400);
+}
+
+/* A stack of n glass squares (two triangles each) across z in (0, 1). */
+static struct accel *stack_of(int n, struct scene **sp)
+{
+	size_t cap = 256 + (size_t)n * 400;
+	char *t = malloc(cap);
+	size_t len = (size_t)snprintf(t, cap, "define material named g colour (1 1 1) transparency 1 ; ;\n");
+	for (int i = 0; i < n; i++) {
+		double z = (i + 0.5) / n;
+		len += (size_t)snprintf(t + len, cap - len,
+					"object triangle a (-1 -1 %.17g) b (1 -1 %.17g) c (1 1 %.17g) ; material called g ; ;\n"
+					"object triangle a (-1 -1 %.17g) b (1 1 %.17g) c (-1 1 %.17g) ; material called g ; ;\n",
+					z, z, z, z, z, z);
+	}
+	struct scene_error err;
+	struct accel *a = NULL;
+	if (parse_buffer("stack", t, len, 0, sp, &err) || accel_build(*sp, &a, &err)) {
+		fprintf(stderr, "stack: %s\n", err.msg);
+		abort();
+	}
+	free(t);
+	return a;
+}
+
+static void bounds(void)
+{
+	static const uint8_t none[2] = { 0, 0 };
+	static struct accel_crossings x, x4[4];
+	for (int n = 63; n <= 65; n++) {
+		struct scene *s;
+		struct accel *a = stack_of(n, &s);
+		S = s;
+		struct accel_cross_filter f = { none, s->n_materials, pass, a };
+		struct ray r[4];
+		for (int j = 0; j < 4; j++) /* off the diagonal edge */
+			r[j] = (struct ray){ v3(0.3 + 0.01 * j, -0.2, -1), v3(0, 0, 3), 0, 1 };
+		uint32_t hint = ACCEL_NO_HINT;
+		bool open = accel_cross(a, &r[0], &f, &x, &hint), o4[4];
+		accel_cross4(a, r, &f, x4, o4, &hint);
+		CHECK(open == (n <= ACCEL_CROSS_MAX) && o4[0] == open);
+		if (open)
+			CHECK(x.n == n && x4[0].n == n);
+		/* the diagonal edge of each square: one crossing per square */
+		struct ray e = { v3(0.25, 0.25, -1), v3(0, 0, 3), 0, 1 };
+		open = accel_cross(a, &e, &f, &x, &hint);
+		CHECK(open == (n <= ACCEL_CROSS_MAX));
+		if (open)
+			CHECK(x.n == n);
+		accel_free(a);
+		scene_free(s);
+	}
+}
+
+static void ties(void)
+{
+	static const char T[] = "define material named ga colour (1 0.5 0.5) transparency 0.5 ; ;\n"
+				"define material named gb colour (0.5 1 0.5) transparency 0.7 ; ;\n"
+				"object triangle a (-1 -1 0) b (1 -1 0) c (0 1 0) ; material called ga ; ;\n"
+				"object triangle a (-1 -1 0) b (1 -1 0) c (0 1 0) ; material called gb ; ;\n"
+				"object triangle a (-1 -1 0.5) b (1 -1 0.5) c (0 1 0.5) ; material called gb ; ;\n"
+				"object triangle a (-1 -1 0.5) b (1 -1 0.5) c (0 1 0.5) ; ;\n";
+	struct scene *s;
+	struct scene_error err;
+	struct accel *a = NULL;
+	if (parse_buffer("ties", T, sizeof T - 1, 0, &s, &err) || accel_build(s, &a, &err)) {
+		fprintf(stderr, "ties: %s\n", err.msg);
+		abort();
+	}
+	S = s;
+	uint8_t none[3] = { 0, 0, 0 };
+	struct accel_cross_filter f = { none, s->n_materials, pass, a };
+	static struct accel_crossings x, x4[4];
+	uint32_t hint = ACCEL_NO_HINT;
+	struct ray r[4];
+	for (int j = 0; j < 4; j++)
+		r[j] = (struct ray){ v3(0.01 * j, 0, -1), v3(0, 0, 1.2), 0, 1 }; /* to z = 0.2 */
+	bool open = accel_cross(a, &r[0], &f, &x, &hint), o4[4];
+	accel_cross4(a, r, &f, x4, o4, &hint);
+	/* two surfaces at one t: once, as the first written (ga) */
+	CHECK(open && x.n == 1 && x.x[0].p.td == 0.5 && x.x[0].p.col.y == 0.5);
+	CHECK(same_list(o4[0], &x4[0], open, &x, true));
+	/* to z = 1: the opaque (default) triangle coincident with gb's blocks */
+	for (int j = 0; j < 4; j++)
+		r[j].d = v3(0, 0, 2);
+	CHECK(!accel_cross(a, &r[0], &f, &x, &hint));
+	accel_cross4(a, r, &f, x4, o4, &hint);
+	CHECK(!o4[0] && !o4[3]);
+	accel_free(a);
+	scene_free(s);
+
+	/* an instance's surface and a root triangle at one t: the triangle's key
+	 * is the lower (CANONICAL TIES), as the closest hit says, whatever the
+	 * order written */
+	static const char U[] = "define material named ga colour (1 0.5 0.5) transparency 0.5 ; ;\n"
+				"define material named gb colour (0.5 1 0.5) transparency 0.7 ; ;\n"
+				"define object name t object triangle a (-1 -1 0) b (1 -1 0) c (0 1 0) ;"
+				" material called gb ; ; ; ;\n"
+				"object t ; ;\n"
+				"object triangle a (-1 -1 0) b (1 -1 0) c (0 1 0) ; material called ga ; ;\n";
+	if (parse_buffer("ties2", U, sizeof U - 1, 0, &s, &err) || accel_build(s, &a, &err)) {
+		fprintf(stderr, "ties2: %s\n", err.msg);
+		abort();
+	}
+	S = s;
+	f.ctx = a;
+	f.n_materials = s->n_materials;
+	static struct accel_crossings y;
+	for (int j = 0; j < 4; j++)
+		r[j] = (struct ray){ v3(0.01 * j, 0, -1), v3(0, 0, 2), 0, 1 };
+	open = accel_cross(a, &r[0], &f, &x, &hint);
+	accel_cross4(a, r, &f, x4, o4, &hint);
+	CHECK(open && x.n == 1 && x.x[0].p.td == 0.5);
+	CHECK(same_list(open, &x, walk(a, &r[0], &f, &y), &y, false));
+	CHECK(same_list(o4[0], &x4[0], open, &x, true));
+	accel_free(a);
+	scene_free(s);
+}
+
+int main(void)
+{
+	struct scene *s;
+	struct scene_error err;
+	struct accel *a = NULL;
+	if (parse_buffer("cross", SCENE, sizeof SCENE - 1, 0, &s, &err) || accel_build(s, &a, &err)) {
+		fprintf(stderr, "scene: %s\n", err.msg);
+		return 1;
+	}
+	S = s;
+	uint8_t *opaque = calloc(s->n_materials + 1, 1), *none = calloc(s->n_materials + 1, 1);
+	for (uint32_t m = 0; m < s->n_materials; m++) /* dark, and the default below */
+		opaque[m] = s->materials[m].shader.kind == SHADER_NONE && s->materials[m].transparency <= 0;
+	opaque[s->n_materials] = 1;
+	struct accel_cross_filter f1 = { opaque, s->n_materials, pass, a }, f2 = { none, s->n_materials, pass, a };
+	printf("opaque materials in the table:\n");
+	against_walk(a, &f1, 11);
+	printf("every material through the callback:\n");
+	against_walk(a, &f2, 12);
+	accel_free(a);
+	scene_free(s);
+	free(opaque);
+	free(none);
+	bounds();
+	ties();
+	TEST_MAIN_END();
+}
