@@ -13,7 +13,13 @@
  *            light: the light's LIGHT BUFFER where it has one (what the
  *            renderer does for the shadow rays of reflection hits)
  * and prints the best frame's rate in Mrays/s of thread CPU time, and a
- * hash of the answers, which must be the same all four ways.
+ * hash of the answers, which must be the same all four ways. Then the
+ * same rays as SHADOW CROSSINGS (every surface on the segment, what a scene
+ * with transparent materials asks for; materials evaluated as shading
+ * evaluates them), two ways whose hashes must agree:
+ *   cross    accel_cross, one ray at a time, one hint per light
+ *   cross4   accel_cross4 over the rays of one 2x2 block toward one light
+ *            (what the renderer does for the eye hits of gears_s2)
  *
  *   bench_shadow [SCENE [FRAMES [WIDTHxHEIGHT]]]
  *
@@ -27,6 +33,7 @@
 
 #include "common/accel.h"
 #include "common/camera.h"
+#include "common/shader.h"
 #include "bench/bench_scene.h"
 
 /* Shadow rays in packets of four: n live rays (the rest repeat the last)
@@ -91,10 +98,43 @@ static int make_rays(const struct scene *sc, const struct accel *a, const struct
 	return 0;
 }
 
-enum mode { SINGLE, HINT, PACKET, LIGHT, N_MODES };
+enum mode { SINGLE, HINT, PACKET, LIGHT, CROSS, CROSS4, N_MODES };
+
+/* The crossings' filter: shading's (cross_pass in shade.c). */
+static const struct scene *cross_scene;
+static bool cross_pass(const void *ctx, struct hit *h, struct accel_pass *p)
+{
+	accel_hit_surface(ctx, h);
+	struct shader_point pt = { h->mp, h->u, h->v, h->n };
+	struct shader_mat m;
+	shader_eval(cross_scene, h->material, &pt, &m);
+	double td = fmin(m.transparency, 1.0);
+	if (!(td > 0))
+		return false;
+	p->col = v3_max(m.tran_colour, v3(0, 0, 0));
+	p->td = td;
+	return true;
+}
+
+/* Hash of a crossing query's answer: open, then each crossing's t and light. */
+static uint64_t cross_hash(uint64_t h64, bool open, const struct accel_crossings *x)
+{
+	h64 = (h64 ^ (uint64_t)open) * 1099511628211ull;
+	for (int k = 0; open && k < x->n; k++) {
+		uint64_t b[4];
+		memcpy(&b[0], &x->x[k].t, 8);
+		memcpy(&b[1], &x->x[k].p.td, 8);
+		memcpy(&b[2], &x->x[k].p.col.x, 8);
+		memcpy(&b[3], &x->x[k].p.col.z, 8);
+		for (int j = 0; j < 4; j++)
+			h64 = (h64 ^ b[j]) * 1099511628211ull;
+	}
+	return h64;
+}
 
 /* One pass over the rays; returns the hash of the answers. */
-static uint64_t pass(const struct accel *a, const struct set *s, enum mode m, uint32_t n_lights)
+static uint64_t pass(const struct accel *a, const struct set *s, enum mode m, uint32_t n_lights,
+		     const struct accel_cross_filter *f)
 {
 	uint32_t *hint = malloc((n_lights ? n_lights : 1) * sizeof *hint);
 	if (!hint)
@@ -105,6 +145,18 @@ static uint64_t pass(const struct accel *a, const struct set *s, enum mode m, ui
 	for (size_t k = 0; k < s->n; k++) {
 		const struct pack *p = &s->p[k];
 		bool occ[4];
+		if (m == CROSS || m == CROSS4) {
+			static struct accel_crossings x[4];
+			bool open[4];
+			if (m == CROSS4)
+				accel_cross4(a, p->r, f, x, open, &hint[p->light]);
+			else
+				for (int i = 0; i < p->n; i++)
+					open[i] = accel_cross(a, &p->r[i], f, &x[i], &hint[p->light]);
+			for (int i = 0; i < p->n; i++)
+				h64 = cross_hash(h64, open[i], &x[i]);
+			continue;
+		}
 		if (m == PACKET)
 			accel_occluded4(a, p->r, occ, &hint[p->light]);
 		else
@@ -130,25 +182,42 @@ int main(int argc, char **argv)
 		printf("%s: out of memory\n", b.path);
 		return 1;
 	}
-	static const char *names[N_MODES] = { "single", "hint", "packet", "light" };
+	static const char *names[N_MODES] = { "single", "hint", "packet", "light", "cross", "cross4" };
 	uint64_t hash[N_MODES];
-	double best[N_MODES] = { INFINITY, INFINITY, INFINITY, INFINITY };
-	for (int m = 0; m < N_MODES; m++)
-		hash[m] = pass(b.a, &s, (enum mode)m, b.s->n_lights);
+	double best[N_MODES];
+	uint8_t *opaque = calloc((size_t)b.s->n_materials + 1, 1);
+	if (!opaque) {
+		printf("%s: out of memory\n", b.path);
+		return 1;
+	}
+	for (uint32_t m = 0; m < b.s->n_materials; m++) /* shading's table (shade_ctx_new) */
+		opaque[m] = b.s->materials[m].shader.kind == SHADER_NONE && !(fmin(b.s->materials[m].transparency, 1.0) > 0);
+	opaque[b.s->n_materials] = 1;
+	cross_scene = b.s;
+	const struct accel_cross_filter filt = { opaque, b.s->n_materials, cross_pass, b.a };
+	for (int m = 0; m < N_MODES; m++) {
+		best[m] = INFINITY;
+		hash[m] = pass(b.a, &s, (enum mode)m, b.s->n_lights, &filt);
+	}
 	for (int f = 0; f < b.frames; f++) /* interleaved, so a load change hits all of them */
 		for (int m = 0; m < N_MODES; m++) {
 			double t0 = bs_cpu_now();
-			pass(b.a, &s, (enum mode)m, b.s->n_lights);
+			pass(b.a, &s, (enum mode)m, b.s->n_lights, &filt);
 			double t = bs_cpu_now() - t0;
 			best[m] = t < best[m] ? t : best[m];
 		}
 	printf("%s %ux%u: %zu shadow rays (%.2f per pixel), best of %d, thread CPU time:\n", b.path, b.w, b.h, s.rays,
 	       (double)s.rays / ((double)b.w * b.h), b.frames);
-	for (int m = 0; m < N_MODES; m++)
+	int bad = 0;
+	for (int m = 0; m < N_MODES; m++) {
+		bool same = hash[m] == hash[m < CROSS ? SINGLE : CROSS];
+		bad |= !same;
 		printf("  %-6s %6.2f Mrays/s; answers hash %016llx%s\n", names[m], (double)s.rays / best[m] * 1e-6,
-		       (unsigned long long)hash[m], hash[m] == hash[0] ? "" : " MISMATCH");
+		       (unsigned long long)hash[m], same ? "" : " MISMATCH");
+	}
+	free(opaque);
 	free(s.p);
 	accel_free(b.a);
 	scene_free(b.s);
-	return 0;
+	return bad;
 }
