@@ -179,7 +179,8 @@ struct accel_cross_filter {
  * opaque surface blocks it or more than ACCEL_CROSS_MAX crossings lie on
  * it (x is then undefined). *hint is as accel_occluded_hint's: a
  * reference that blocked an earlier segment, tested first; on "blocked" it
- * may name the blocker. Thread-safe. */
+ * may name the blocker. Once a cancel poll has seen its flag (above), the
+ * answer is meaningless. Thread-safe. */
 bool accel_cross(const struct accel *a, const struct ray *r, const struct accel_cross_filter *f,
 		 struct accel_crossings *x, uint32_t *hint);
 /* accel_cross of four rays at once (open[i] and x[i] are what it gives

@@ -11,7 +11,7 @@
  * a ray through a glass gear. Here one traversal of the segment finds every
  * crossing, in any order, and stops at the first opaque one; the list is
  * kept in order of t, one entry per t. gears_s2 took 22% less time for the
- * same image (docs/performance.md, round 17).
+ * same image but one pixel (docs/performance.md, round 17).
  *
  * The traversal needs no order (a crossing is a crossing wherever it is
  * found), so it is the any-hit one's: each node's children that the
@@ -28,22 +28,27 @@
 #include "common/accel_trace.h"
 #include "common/cancel.h"
 
-/* Adds a crossing at t of tie key `key` to X: one entry per t, the
- * least key's. False when X is full (the segment counts as blocked). */
-static bool cross_add(struct accel_crossings *X, double t, uint64_t key, const struct accel_pass *p)
+/* The entry for t in X: a new one (n, the list grown) or the one there. */
+static int cross_slot(struct accel_crossings *X, double t)
 {
-	for (int k = 0; k < X->n; k++)
-		if (X->x[k].t == t) {
-			if (key < X->x[k].key) {
-				X->x[k].key = key;
-				X->x[k].p = *p;
-			}
-			return true;
-		}
-	if (X->n >= ACCEL_CROSS_MAX)
-		return false;
-	X->x[X->n++] = (struct accel_crossing){ t, key, *p };
-	return true;
+	int k = 0;
+	while (k < X->n && X->x[k].t != t)
+		k++;
+	return k;
+}
+
+/* What the surface the closest hit names at t lets through (false:
+ * nothing), for two surfaces of one nested instance at t, whose keys tie
+ * (struct cross_level): the query's ray from just below t to just above. */
+static bool cross_settle(const struct cross_query *Q, double t, struct accel_pass *p)
+{
+	struct ray q = *Q->r;
+	q.tmin = nextafter(t, 0);
+	q.tmax = next_up(t);
+	struct hit h;
+	if (!accel_intersect(Q->A, &q, &h))
+		return true; /* not again (cannot happen): the entry stands */
+	return Q->f->pass(Q->f->ctx, &h, p);
 }
 
 bool accel_cross_emit(const struct cross_query *Q, const struct group *g, const struct trace *r,
@@ -67,11 +72,26 @@ bool accel_cross_emit(const struct cross_query *Q, const struct group *g, const 
 		hp.p = v3_add(l->pr->o, v3_scale(l->pr->d, hp.t));
 		h = hp;
 	}
+	if (cancel_poll()) /* CANCELLATION: shaders may be costly; the answer is dropped */
+		return false;
 	struct accel_pass p;
 	if (!Q->f->pass(Q->f->ctx, &h, &p))
 		return false;
+	/* one entry per t, the least key's (CANONICAL TIES) */
+	struct accel_crossings *X = Q->X;
 	uint64_t key = !lv ? (uint64_t)c->key << 32 : lv->depth == 1 ? lv->key | c->key : lv->key;
-	return cross_add(Q->X, c->t, key, &p);
+	int k = cross_slot(X, c->t);
+	if (k == X->n) {
+		if (X->n >= ACCEL_CROSS_MAX)
+			return false; /* too many: blocked */
+		X->x[X->n++] = (struct accel_crossing){ c->t, key, p };
+	} else if (key < X->x[k].key) {
+		X->x[k].key = key;
+		X->x[k].p = p;
+	} else if (key == X->x[k].key && lv && lv->depth > 1) {
+		return cross_settle(Q, c->t, &X->x[k].p);
+	}
+	return true;
 }
 
 static bool group_cross(const struct cross_query *Q, const struct group *g, struct trace *r,
@@ -235,7 +255,7 @@ bool accel_cross(const struct accel *a, const struct ray *r, const struct accel_
 		return true;
 	struct trace t;
 	trace_init(&t, r->o, r->d, ray_tmin(r), r->tmax);
-	const struct cross_query Q = { a, f, x, hint };
+	const struct cross_query Q = { a, r, f, x, hint };
 	if (cross_hint_blocks(&Q, a->root, &t))
 		return false;
 	if (!group_cross(&Q, a->root, &t, NULL))

@@ -854,8 +854,9 @@ static void group_occluded4(const struct accel *A, const struct group *g, struct
 /*
  * accel_cross4's traversal (SHADOW CROSSINGS, accel_cross.c): the tree as
  * bvh_occluded4 walks it, each ray tested for what it meets, with
- * accel_cross's tests; a ray is dropped (its bit cleared from *active) when
- * it is blocked. Q[i] is ray i's query.
+ * accel_cross's tests (a leaf block's triangles through the TRIANGLE
+ * PRE-TEST wherever two rays meet it); a ray is dropped (its bit cleared
+ * from *active) when it is blocked. Q[i] is ray i's query.
  */
 static inline __attribute__((always_inline)) void bvh_cross4(const struct group *g, struct trace tr[4],
 							     unsigned *active, const struct ray4x *P,
@@ -963,9 +964,9 @@ out:
 	*active = act;
 }
 
-/* accel_cross4's packet query in g (as group_occluded4's) for four rays
- * of one octant: the hint and the unbounded references ray by ray, then
- * the tree for the rays still open. */
+/* accel_cross4's packet query in g for four rays of one octant: the hint
+ * and the unbounded references ray by ray, then the tree for the rays
+ * still open. */
 static void group_cross4(const struct group *g, struct trace tr[4], uint32_t oct, const struct cross_query Q[4],
 			 bool open[4])
 {
@@ -1089,8 +1090,8 @@ void accel_cross4(const struct accel *a, const struct ray r[4], const struct acc
 	struct trace tr[4];
 	uint32_t oct;
 	if (packet_start(a, r, tr, &oct)) {
-		const struct cross_query Q[4] = { { a, f, &x[0], hint }, { a, f, &x[1], hint }, { a, f, &x[2], hint },
-						  { a, f, &x[3], hint } };
+		const struct cross_query Q[4] = { { a, &r[0], f, &x[0], hint }, { a, &r[1], f, &x[1], hint },
+						  { a, &r[2], f, &x[2], hint }, { a, &r[3], f, &x[3], hint } };
 		for (int i = 0; i < 4; i++)
 			x[i].n = 0;
 		group_cross4(a->root, tr, oct, Q, open);

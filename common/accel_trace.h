@@ -632,9 +632,11 @@ static inline __attribute__((always_inline)) int children_by_entry(int m, const 
 
 /* ---- SHADOW CROSSINGS (accel_cross.c, accel_packet.c) ------------------------------- */
 
-/* A query's filter, list and hint (accel_cross, accel_cross4). */
+/* A query's ray (world space), filter, list and hint (accel_cross,
+ * accel_cross4). */
 struct cross_query {
 	const struct accel *A;
+	const struct ray *r;
 	const struct accel_cross_filter *f;
 	struct accel_crossings *X;
 	uint32_t *hint;
@@ -645,7 +647,9 @@ struct cross_query {
  * levels to the world (accel_inst_to_parent), and takes its tie key from
  * the references it came through: the instance's at the root (high 32
  * bits), the reference's within the first define (low 32), and below
- * that the first define's reference's alone. */
+ * that the first define's reference's alone, which the surfaces of a
+ * nested instance share: two of them at one t are settled by the closest
+ * hit there (accel_cross_emit). */
 struct cross_level {
 	const struct cross_level *up; /* NULL: this instance is the root group's */
 	const struct trace *pr;       /* the ray in the parent's space */
@@ -666,12 +670,15 @@ static inline bool cross_opaque(const struct accel_cross_filter *f, uint32_t m)
 
 /* Candidate c (ref, key, t and what accel_finish reads) of group g on r at
  * level lv (NULL: the root group), material mat (SCENE_NONE: the
- * instance's, CROSS_MAT_UNKNOWN: the hit's): false when it blocks the
- * segment (opaque, or the list is full), else its entry made. */
+ * instance's, or at the root the default material; CROSS_MAT_UNKNOWN: the
+ * hit's): false when it blocks the segment (opaque, or the list is full),
+ * else its entry made. */
 bool accel_cross_emit(const struct cross_query *Q, const struct group *g, const struct trace *r,
 		      const struct cand *c, uint32_t mat, const struct cross_level *lv);
-/* Every crossing of reference ref of g on r (r->tmax is kept): false when
- * one blocks the segment. */
+/* Every crossing of reference ref of g on r: false when one blocks the
+ * segment. r's tmin and tmax are as they were; its MAILBOX may name ref (a
+ * later test of it is skipped, which is right: every crossing of it was
+ * taken here). */
 bool accel_cross_ref(const struct cross_query *Q, const struct group *g, uint32_t ref, struct trace *r,
 		     const struct cross_level *lv);
 /* X->x in order of t (the entries' t differ). */
@@ -700,7 +707,9 @@ static inline __attribute__((always_inline)) bool cross_tri(const struct cross_q
 }
 
 /* Whether the hint, a reference of the root group g whose material is
- * opaque everywhere, blocks r. */
+ * opaque everywhere, blocks r. ref_occludes may leave r's MAILBOX naming an
+ * xprim it found no hit of: the traversal then skips a reference without
+ * crossings on r. */
 static inline bool cross_hint_blocks(const struct cross_query *Q, const struct group *g, struct trace *r)
 {
 	uint32_t h = *Q->hint, i = REF_IDX(h);

@@ -600,6 +600,14 @@ static vec3 crossings_light(const struct accel_crossings *x)
 	return t;
 }
 
+/* The light the crossings of shadow ray r let through. Not inlined: its
+ * list (3 KB) stays out of the frames of shading's recursion. */
+static __attribute__((noinline)) vec3 cross_one(const struct shade_ctx *c, const struct ray *r, uint32_t *hint)
+{
+	struct accel_crossings x;
+	return accel_cross(c->a, r, &c->cross, &x, hint) ? crossings_light(&x) : v3(0, 0, 0);
+}
+
 /*
  * How much light passes from o to the point lp (light i; obj: the object
  * hit, for the hint): (1,1,1) when nothing is in the way, 0 when something
@@ -616,8 +624,7 @@ static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp, uint32_t l
 		return pre->tval[light];
 	if (!c->any_transparent || !may_cross_transparent(c, &r))
 		return accel_occluded_light(c->a, light, &r, light_hint(c, light, obj)) ? v3(0, 0, 0) : v3(1, 1, 1);
-	struct accel_crossings x;
-	return accel_cross(c->a, &r, &c->cross, &x, light_hint(c, light, obj)) ? crossings_light(&x) : v3(0, 0, 0);
+	return cross_one(c, &r, light_hint(c, light, obj));
 }
 
 /* The largest |channel|, or NaN when a channel is NaN or infinite (0 * it is NaN). */
@@ -1103,8 +1110,9 @@ static void shadow_packets(const struct shade_ctx *c, const struct surf sf[4], c
 
 /* transmittance() of four shadow rays r[j] of one octant toward light i,
  * as one packet of crossings (accel_cross4), into t[j]; obj[j]: the object
- * ray j starts from (the first's names the hint). */
-static void cross_packet(const struct shade_ctx *c, const struct ray r[4], uint32_t i, const uint32_t obj[4],
+ * ray j starts from (the first's names the hint). Not inlined, as
+ * cross_one. */
+static __attribute__((noinline)) void cross_packet(const struct shade_ctx *c, const struct ray r[4], uint32_t i, const uint32_t obj[4],
 			 vec3 t[4])
 {
 	struct accel_crossings x[4];

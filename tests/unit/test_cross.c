@@ -191,9 +191,14 @@ static void bounds(void)
 		uint32_t hint = ACCEL_NO_HINT;
 		bool open = accel_cross(a, &r[0], &f, &x, &hint), o4[4];
 		accel_cross4(a, r, &f, x4, o4, &hint);
-		CHECK(open == (n <= ACCEL_CROSS_MAX) && o4[0] == open);
+		CHECK(open == (n <= ACCEL_CROSS_MAX));
+		for (int j = 0; j < 4; j++) {
+			CHECK(o4[j] == open);
+			if (open)
+				CHECK(x4[j].n == n);
+		}
 		if (open)
-			CHECK(x.n == n && x4[0].n == n);
+			CHECK(x.n == n);
 		/* the diagonal edge of each square: one crossing per square */
 		struct ray e = { v3(0.25, 0.25, -1), v3(0, 0, 3), 0, 1 };
 		open = accel_cross(a, &e, &f, &x, &hint);
@@ -205,69 +210,93 @@ static void bounds(void)
 	}
 }
 
-static void ties(void)
+/* Scene text t, padded with 40 small opaque spheres far from the rays so
+ * that the root is a tree and accel_cross4 takes the packet path. */
+static struct accel *tie_scene(const char *t, struct scene **sp)
 {
-	static const char T[] = "define material named ga colour (1 0.5 0.5) transparency 0.5 ; ;\n"
-				"define material named gb colour (0.5 1 0.5) transparency 0.7 ; ;\n"
-				"object triangle a (-1 -1 0) b (1 -1 0) c (0 1 0) ; material called ga ; ;\n"
-				"object triangle a (-1 -1 0) b (1 -1 0) c (0 1 0) ; material called gb ; ;\n"
-				"object triangle a (-1 -1 0.5) b (1 -1 0.5) c (0 1 0.5) ; material called gb ; ;\n"
-				"object triangle a (-1 -1 0.5) b (1 -1 0.5) c (0 1 0.5) ; ;\n";
-	struct scene *s;
+	char buf[8192];
+	size_t len = (size_t)snprintf(buf, sizeof buf, "%s", t);
+	for (int i = 0; i < 40; i++)
+		len += (size_t)snprintf(buf + len, sizeof buf - len,
+					"object sphere centre (%d 9 %d) radius 0.1 ; ;\n", 8 + i % 5, i / 5);
 	struct scene_error err;
 	struct accel *a = NULL;
-	if (parse_buffer("ties", T, sizeof T - 1, 0, &s, &err) || accel_build(s, &a, &err)) {
-		fprintf(stderr, "ties: %s\n", err.msg);
+	if (len >= sizeof buf || parse_buffer("ties", buf, len, 0, sp, &err) || accel_build(*sp, &a, &err)) {
+		fprintf(stderr, "ties: %s\n", len >= sizeof buf ? "too long" : err.msg);
 		abort();
 	}
+	return a;
+}
+
+/* Four rays from near (0 0 -1) to z = z1 through scene t: each lane's
+ * crossings, single and packet alike, and as the walk says when `walks`;
+ * returns lane 0's (open, *x). */
+static bool tie_rays(const char *t, double z1, bool walks, struct accel_crossings *x)
+{
+	struct scene *s;
+	struct accel *a = tie_scene(t, &s);
 	S = s;
-	uint8_t none[3] = { 0, 0, 0 };
+	uint8_t none[8] = { 0 };
 	struct accel_cross_filter f = { none, s->n_materials, pass, a };
-	static struct accel_crossings x, x4[4];
+	static struct accel_crossings x4[4], y;
 	uint32_t hint = ACCEL_NO_HINT;
 	struct ray r[4];
 	for (int j = 0; j < 4; j++)
-		r[j] = (struct ray){ v3(0.01 * j, 0, -1), v3(0, 0, 1.2), 0, 1 }; /* to z = 0.2 */
-	bool open = accel_cross(a, &r[0], &f, &x, &hint), o4[4];
+		r[j] = (struct ray){ v3(0.01 * j, 0.02 * (j >> 1), -1), v3(0, 0, z1 + 1), 0, 1 };
+	bool o4[4], open0 = false;
 	accel_cross4(a, r, &f, x4, o4, &hint);
-	/* two surfaces at one t: once, as the first written (ga) */
-	CHECK(open && x.n == 1 && x.x[0].p.td == 0.5 && x.x[0].p.col.y == 0.5);
-	CHECK(same_list(o4[0], &x4[0], open, &x, true));
-	/* to z = 1: the opaque (default) triangle coincident with gb's blocks */
-	for (int j = 0; j < 4; j++)
-		r[j].d = v3(0, 0, 2);
-	CHECK(!accel_cross(a, &r[0], &f, &x, &hint));
-	accel_cross4(a, r, &f, x4, o4, &hint);
-	CHECK(!o4[0] && !o4[3]);
-	accel_free(a);
-	scene_free(s);
-
-	/* an instance's surface and a root triangle at one t: the triangle's key
-	 * is the lower (CANONICAL TIES), as the closest hit says, whatever the
-	 * order written */
-	static const char U[] = "define material named ga colour (1 0.5 0.5) transparency 0.5 ; ;\n"
-				"define material named gb colour (0.5 1 0.5) transparency 0.7 ; ;\n"
-				"define object name t object triangle a (-1 -1 0) b (1 -1 0) c (0 1 0) ;"
-				" material called gb ; ; ; ;\n"
-				"object t ; ;\n"
-				"object triangle a (-1 -1 0) b (1 -1 0) c (0 1 0) ; material called ga ; ;\n";
-	if (parse_buffer("ties2", U, sizeof U - 1, 0, &s, &err) || accel_build(s, &a, &err)) {
-		fprintf(stderr, "ties2: %s\n", err.msg);
-		abort();
+	for (int j = 0; j < 4; j++) {
+		bool open = accel_cross(a, &r[j], &f, x, &hint);
+		CHECK(same_list(o4[j], &x4[j], open, x, true));
+		CHECK(!walks || same_list(open, x, walk(a, &r[j], &f, &y), &y, false));
+		if (j == 0)
+			open0 = open;
 	}
-	S = s;
-	f.ctx = a;
-	f.n_materials = s->n_materials;
-	static struct accel_crossings y;
-	for (int j = 0; j < 4; j++)
-		r[j] = (struct ray){ v3(0.01 * j, 0, -1), v3(0, 0, 2), 0, 1 };
-	open = accel_cross(a, &r[0], &f, &x, &hint);
-	accel_cross4(a, r, &f, x4, o4, &hint);
-	CHECK(open && x.n == 1 && x.x[0].p.td == 0.5);
-	CHECK(same_list(open, &x, walk(a, &r[0], &f, &y), &y, false));
-	CHECK(same_list(o4[0], &x4[0], open, &x, true));
+	accel_cross(a, &r[0], &f, x, &hint);
 	accel_free(a);
 	scene_free(s);
+	return open0;
+}
+
+static void ties(void)
+{
+#define MATS                                                                                                   \
+	"define material named ga colour (1 0.5 0.5) transparency 0.5 ; ;\n"                                   \
+	"define material named gb colour (0.5 1 0.5) transparency 0.7 ; ;\n"
+	static struct accel_crossings x;
+	static const char T[] = MATS "object triangle a (-1 -1 0) b (1 -1 0) c (0 1 0) ; material called ga ; ;\n"
+				     "object triangle a (-1 -1 0) b (1 -1 0) c (0 1 0) ; material called gb ; ;\n"
+				     "object triangle a (-1 -1 0.5) b (1 -1 0.5) c (0 1 0.5) ; material called gb ; ;\n"
+				     "object triangle a (-1 -1 0.5) b (1 -1 0.5) c (0 1 0.5) ; ;\n";
+	/* two surfaces at one t: once, as the first written (ga) */
+	CHECK(tie_rays(T, 0.2, true, &x) && x.n == 1 && x.x[0].p.td == 0.5 && x.x[0].p.col.y == 0.5);
+	/* to z = 1: the opaque (default) triangle written after gb's, at its t,
+	 * blocks, where the closest hit there is gb's (a walk would pass) */
+	CHECK(!tie_rays(T, 1, false, &x));
+	/* an instance's surface and a root triangle at one t: the triangle's key is
+	 * the lower (CANONICAL TIES) whatever the order written */
+	static const char U[] = MATS "define object name t object triangle a (-1 -1 0) b (1 -1 0) c (0 1 0) ;"
+				     " material called gb ; ; ; ;\n"
+				     "object t ; ;\n"
+				     "object triangle a (-1 -1 0) b (1 -1 0) c (0 1 0) ; material called ga ; ;\n";
+	CHECK(tie_rays(U, 1, true, &x) && x.n == 1 && x.x[0].p.td == 0.5);
+	/* two surfaces of an instance within an instance: the first member
+	 * written (ga's triangle), as the closest hit takes it */
+	static const char V[] = MATS "define object name inner\n"
+				     "  object triangle a (-5 -5 0) b (5 -5 0) c (0 5 0) ; material called ga ; ;\n"
+				     "  object plane position (0 0 0) normal (0 0 1) ; material called gb ; ;\n"
+				     "; ;\n"
+				     "define object name mid object inner ; ; ; ;\n"
+				     "object mid ; ;\n";
+	CHECK(tie_rays(V, 1, true, &x) && x.n == 1 && x.x[0].p.td == 0.5);
+	/* the same a level less deep */
+	static const char W[] = MATS "define object name inner\n"
+				     "  object triangle a (-5 -5 0) b (5 -5 0) c (0 5 0) ; material called ga ; ;\n"
+				     "  object plane position (0 0 0) normal (0 0 1) ; material called gb ; ;\n"
+				     "; ;\n"
+				     "object inner ; ;\n";
+	CHECK(tie_rays(W, 1, true, &x) && x.n == 1 && x.x[0].p.td == 0.5);
+#undef MATS
 }
 
 int main(void)
