@@ -286,6 +286,8 @@ static inline __attribute__((always_inline)) bool tri_occludes(const struct grou
  * rings_s3: 620,708 of 7.8 M cylinder tests a frame (docs/performance.md,
  * round 14). Only xprims: spheres and triangles have one box each but for
  * split slivers, whose tests in blocks have no room for the check.
+ * SHADOW CROSSINGS skip a repeat too: their first test of a reference took
+ * every crossing it has on the segment (accel_cross_ref).
  */
 static inline bool mailbox_seen(struct trace *r, uint32_t ref)
 {
