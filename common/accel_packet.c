@@ -691,6 +691,68 @@ static void group_hit_block(const struct accel *A, const struct group *g, struct
 	}
 }
 
+/* A subtree on the any-hit packet walks' stack (bvh_occluded4, bvh_cross4). */
+struct lanes_entry {
+	uint32_t idx, n;
+	unsigned lanes; /* the rays that met the subtree's box */
+};
+
+/* The any-hit packet walks' next subtree some ray in act met, popped into
+ * *idx, *n and *lanes; false when the stack is empty. */
+static inline bool any_pop(const struct lanes_entry *stack, int *sp, unsigned act, uint32_t *idx, uint32_t *n,
+			   unsigned *lanes)
+{
+	do {
+		if (*sp == 0)
+			return false;
+		--*sp;
+	} while (!(stack[*sp].lanes & act));
+	*idx = stack[*sp].idx;
+	*n = stack[*sp].n;
+	*lanes = stack[*sp].lanes;
+	return true;
+}
+
+/* The any-hit packet walks' visit of node nd: each child against the four
+ * rays (lane i: ray i) still in act; the lowest child some ray meets into
+ * *idx, *n and *lanes, the others pushed; false when none is met. */
+static inline __attribute__((always_inline)) bool any_node4(const struct bvh4 *nd, const uint32_t near[3],
+							   const uint32_t far[3], __m128 tmin4, __m128 tmax4,
+							   const struct ray4x *P, unsigned act,
+							   struct lanes_entry *stack, int *sp, uint32_t *idx,
+							   uint32_t *n, unsigned *lanes)
+{
+	const float *b = (const float *)(const void *)nd; /* rows as in node4_hit */
+	unsigned m[4];
+	for (int c = 0; c < 4; c++) {
+		__m128 t0 = tmin4, t1 = tmax4;
+		for (int k = 0; k < 3; k++) {
+			__m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[near[k] + (uint32_t)c]), P->o[k]), P->inv_near[k]);
+			__m128 tf = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[far[k] + (uint32_t)c]), P->o[k]), P->inv_far[k]);
+			t0 = _mm_max_ps(t0, tn);
+			t1 = _mm_min_ps(t1, tf);
+		}
+		m[c] = (unsigned)_mm_movemask_ps(_mm_cmple_ps(t0, t1)) & act;
+	}
+	int first = -1;
+	for (int c = 3; c >= 0; c--) {
+		if (!m[c])
+			continue;
+		if (first >= 0) {
+			stack[*sp].idx = nd->idx[first];
+			stack[*sp].n = nd->n[first];
+			stack[(*sp)++].lanes = m[first];
+		}
+		first = c;
+	}
+	if (first < 0)
+		return false;
+	*idx = nd->idx[first];
+	*n = nd->n[first];
+	*lanes = m[first];
+	return true;
+}
+
 /*
  * The any-hit packet traversal of g's bounded references for the rays
  * (lanes) in *active: a subtree is visited when an active ray may hit it
@@ -709,10 +771,7 @@ static inline __attribute__((always_inline)) void bvh_occluded4(const struct acc
 	const uint32_t near[3] = { 12 * (oct & 1), 4 + 12 * (oct >> 1 & 1), 8 + 12 * (oct >> 2 & 1) };
 	const uint32_t far[3] = { 12 * (~oct & 1), 4 + 12 * (~oct >> 1 & 1), 8 + 12 * (~oct >> 2 & 1) };
 	const __m128 tmin4 = lanes_box_tmin(tr, P->tscale), tmax4 = lanes_box_tmax(tr, P->tscale);
-	struct {
-		uint32_t idx, n;
-		unsigned lanes; /* the rays that met the subtree's box */
-	} stack[3 * BVH_MAX_DEPTH + 4];
+	struct lanes_entry stack[3 * BVH_MAX_DEPTH + 4];
 	int sp = 0;
 	unsigned act = *active, lanes = act;
 	uint32_t idx = 0, n = 0;
@@ -760,57 +819,17 @@ static inline __attribute__((always_inline)) void bvh_occluded4(const struct acc
 			if (!act)
 				break;
 		} else {
-			const struct bvh4 *nd = &nodes[idx];
-			const float *b = (const float *)(const void *)nd; /* rows as in node4_hit */
-			unsigned m[4];
-			for (int c = 0; c < 4; c++) {
-				__m128 t0 = tmin4, t1 = tmax4;
-				for (int k = 0; k < 3; k++) {
-					__m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[near[k] + (uint32_t)c]), P->o[k]),
-							       P->inv_near[k]);
-					__m128 tf = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[far[k] + (uint32_t)c]), P->o[k]),
-							       P->inv_far[k]);
-					t0 = _mm_max_ps(t0, tn);
-					t1 = _mm_min_ps(t1, tf);
-				}
-				m[c] = (unsigned)_mm_movemask_ps(_mm_cmple_ps(t0, t1)) & act;
-			}
-			int first = -1;
-			for (int c = 3; c >= 0; c--) {
-				if (!m[c])
-					continue;
-				if (first >= 0) {
-					stack[sp].idx = nd->idx[first];
-					stack[sp].n = nd->n[first];
-					stack[sp++].lanes = m[first];
-				}
-				first = c;
-			}
-			if (first >= 0) {
-				idx = nd->idx[first];
-				n = nd->n[first];
-				lanes = m[first];
+			if (any_node4(&nodes[idx], near, far, tmin4, tmax4, P, act, stack, &sp, &idx, &n, &lanes))
 				continue;
-			}
 		}
 		if (__builtin_expect(--polls == 0, 0)) { /* CANCELLATION, as bvh_hit */
 			polls = ACCEL_POLL_POPS;
 			if (cancel_poll())
 				break;
 		}
-		/* pop the next subtree some active ray meets */
-		for (;;) {
-			if (sp == 0)
-				goto out;
-			sp--;
-			if (stack[sp].lanes & act)
-				break;
-		}
-		idx = stack[sp].idx;
-		n = stack[sp].n;
-		lanes = stack[sp].lanes;
+		if (!any_pop(stack, &sp, act, &idx, &n, &lanes))
+			break;
 	}
-out:
 	*active = act;
 }
 
@@ -866,10 +885,7 @@ static inline __attribute__((always_inline)) void bvh_cross4(const struct group 
 	const uint32_t near[3] = { 12 * (oct & 1), 4 + 12 * (oct >> 1 & 1), 8 + 12 * (oct >> 2 & 1) };
 	const uint32_t far[3] = { 12 * (~oct & 1), 4 + 12 * (~oct >> 1 & 1), 8 + 12 * (~oct >> 2 & 1) };
 	const __m128 tmin4 = lanes_box_tmin(tr, P->tscale), tmax4 = lanes_box_tmax(tr, P->tscale);
-	struct {
-		uint32_t idx, n;
-		unsigned lanes; /* the rays that met the subtree's box */
-	} stack[3 * BVH_MAX_DEPTH + 4];
+	struct lanes_entry stack[3 * BVH_MAX_DEPTH + 4];
 	int sp = 0;
 	unsigned act = *active, lanes = act;
 	uint32_t idx = 0, n = 0;
@@ -911,56 +927,17 @@ static inline __attribute__((always_inline)) void bvh_cross4(const struct group 
 			if (!act)
 				break;
 		} else {
-			const struct bvh4 *nd = &nodes[idx];
-			const float *b = (const float *)(const void *)nd; /* rows as in node4_hit */
-			unsigned m[4];
-			for (int c = 0; c < 4; c++) { /* bvh_occluded4's test */
-				__m128 t0 = tmin4, t1 = tmax4;
-				for (int k = 0; k < 3; k++) {
-					__m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[near[k] + (uint32_t)c]), P->o[k]),
-							       P->inv_near[k]);
-					__m128 tf = _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(b[far[k] + (uint32_t)c]), P->o[k]),
-							       P->inv_far[k]);
-					t0 = _mm_max_ps(t0, tn);
-					t1 = _mm_min_ps(t1, tf);
-				}
-				m[c] = (unsigned)_mm_movemask_ps(_mm_cmple_ps(t0, t1)) & act;
-			}
-			int first = -1;
-			for (int c = 3; c >= 0; c--) {
-				if (!m[c])
-					continue;
-				if (first >= 0) {
-					stack[sp].idx = nd->idx[first];
-					stack[sp].n = nd->n[first];
-					stack[sp++].lanes = m[first];
-				}
-				first = c;
-			}
-			if (first >= 0) {
-				idx = nd->idx[first];
-				n = nd->n[first];
-				lanes = m[first];
+			if (any_node4(&nodes[idx], near, far, tmin4, tmax4, P, act, stack, &sp, &idx, &n, &lanes))
 				continue;
-			}
 		}
 		if (__builtin_expect(--polls == 0, 0)) { /* CANCELLATION, as bvh_hit */
 			polls = ACCEL_POLL_POPS;
 			if (cancel_poll())
 				break;
 		}
-		for (;;) { /* pop the next subtree some ray still open meets */
-			if (sp == 0)
-				goto out;
-			sp--;
-			if (stack[sp].lanes & act)
-				break;
-		}
-		idx = stack[sp].idx;
-		n = stack[sp].n;
-		lanes = stack[sp].lanes;
+		if (!any_pop(stack, &sp, act, &idx, &n, &lanes))
+			break;
 	}
-out:
 	*active = act;
 }
 
