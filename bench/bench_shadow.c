@@ -15,8 +15,8 @@
  * and prints the best frame's rate in Mrays/s of thread CPU time, and a
  * hash of the answers, which must be the same all four ways. Then the
  * same rays as SHADOW CROSSINGS (every surface on the segment, what a scene
- * with transparent materials asks for; materials evaluated as shading
- * evaluates them), two ways whose hashes must agree:
+ * with transparent materials asks for, with shading's filter,
+ * shade_cross_filter), two ways whose hashes must agree:
  *   cross    accel_cross, one ray at a time, one hint per light
  *   cross4   accel_cross4 over the rays of one 2x2 block toward one light
  *            (what the renderer does for the eye hits of gears_s2)
@@ -33,7 +33,7 @@
 
 #include "common/accel.h"
 #include "common/camera.h"
-#include "common/shader.h"
+#include "common/shade.h"
 #include "bench/bench_scene.h"
 
 /* Shadow rays in packets of four: n live rays (the rest repeat the last)
@@ -99,22 +99,6 @@ static int make_rays(const struct scene *sc, const struct accel *a, const struct
 }
 
 enum mode { SINGLE, HINT, PACKET, LIGHT, CROSS, CROSS4, N_MODES };
-
-/* The crossings' filter: shading's (cross_pass in shade.c). */
-static const struct scene *cross_scene;
-static bool cross_pass(const void *ctx, struct hit *h, struct accel_pass *p)
-{
-	accel_hit_surface(ctx, h);
-	struct shader_point pt = { h->mp, h->u, h->v, h->n };
-	struct shader_mat m;
-	shader_eval(cross_scene, h->material, &pt, &m);
-	double td = fmin(m.transparency, 1.0);
-	if (!(td > 0))
-		return false;
-	p->col = v3_max(m.tran_colour, v3(0, 0, 0));
-	p->td = td;
-	return true;
-}
 
 /* Hash of a crossing query's answer: open, then each crossing's t and light. */
 static uint64_t cross_hash(uint64_t h64, bool open, const struct accel_crossings *x)
@@ -185,24 +169,21 @@ int main(int argc, char **argv)
 	static const char *names[N_MODES] = { "single", "hint", "packet", "light", "cross", "cross4" };
 	uint64_t hash[N_MODES];
 	double best[N_MODES];
-	uint8_t *opaque = calloc((size_t)b.s->n_materials + 1, 1);
-	if (!opaque) {
-		printf("%s: out of memory\n", b.path);
+	struct shade_ctx *sc; /* the crossings' filter: shading's */
+	struct scene_error err;
+	if (shade_ctx_new(b.s, b.a, &sc, &err)) {
+		printf("%s: %s\n", b.path, err.msg);
 		return 1;
 	}
-	for (uint32_t m = 0; m < b.s->n_materials; m++) /* shading's table (shade_ctx_new) */
-		opaque[m] = b.s->materials[m].shader.kind == SHADER_NONE && !(fmin(b.s->materials[m].transparency, 1.0) > 0);
-	opaque[b.s->n_materials] = 1;
-	cross_scene = b.s;
-	const struct accel_cross_filter filt = { opaque, b.s->n_materials, cross_pass, b.a };
+	const struct accel_cross_filter *filt = shade_cross_filter(sc);
 	for (int m = 0; m < N_MODES; m++) {
 		best[m] = INFINITY;
-		hash[m] = pass(b.a, &s, (enum mode)m, b.s->n_lights, &filt);
+		hash[m] = pass(b.a, &s, (enum mode)m, b.s->n_lights, filt);
 	}
 	for (int f = 0; f < b.frames; f++) /* interleaved, so a load change hits all of them */
 		for (int m = 0; m < N_MODES; m++) {
 			double t0 = bs_cpu_now();
-			pass(b.a, &s, (enum mode)m, b.s->n_lights, &filt);
+			pass(b.a, &s, (enum mode)m, b.s->n_lights, filt);
 			double t = bs_cpu_now() - t0;
 			best[m] = t < best[m] ? t : best[m];
 		}
@@ -215,7 +196,7 @@ int main(int argc, char **argv)
 		printf("  %-6s %6.2f Mrays/s; answers hash %016llx%s\n", names[m], (double)s.rays / best[m] * 1e-6,
 		       (unsigned long long)hash[m], same ? "" : " MISMATCH");
 	}
-	free(opaque);
+	shade_ctx_free(sc);
 	free(s.p);
 	accel_free(b.a);
 	scene_free(b.s);

@@ -51,6 +51,13 @@ static bool cross_settle(const struct cross_query *Q, double t, struct accel_pas
 	return Q->f->pass(Q->f->ctx, &h, p);
 }
 
+/* The tie key of a crossing of a reference of key `key` at level lv
+ * (struct cross_level), and of the level an instance reference opens. */
+static uint64_t cross_key(const struct cross_level *lv, uint32_t key)
+{
+	return !lv ? (uint64_t)key << 32 : lv->depth == 1 ? lv->key | key : lv->key;
+}
+
 bool accel_cross_emit(const struct cross_query *Q, const struct group *g, const struct trace *r,
 		      const struct cand *c, uint32_t mat, const struct cross_level *lv)
 {
@@ -79,7 +86,7 @@ bool accel_cross_emit(const struct cross_query *Q, const struct group *g, const 
 		return false;
 	/* one entry per t, the least key's (CANONICAL TIES) */
 	struct accel_crossings *X = Q->X;
-	uint64_t key = !lv ? (uint64_t)c->key << 32 : lv->depth == 1 ? lv->key | c->key : lv->key;
+	uint64_t key = cross_key(lv, c->key);
 	int k = cross_slot(X, c->t);
 	if (k == X->n) {
 		if (X->n >= ACCEL_CROSS_MAX)
@@ -104,9 +111,8 @@ static bool inst_cross(const struct cross_query *Q, const struct group *g, uint3
 	if (cancel_poll()) /* CANCELLATION: nested instances multiply the work */
 		return true;
 	const struct scene_inst *si = &Q->A->s->insts[g->inst[i].rec];
-	uint32_t key = REF_MAKE(REF_INST, g->inst[i].rec);
-	struct cross_level nl = { lv, r, si, { { { 0 } } }, lv ? lv->depth + 1 : 1, 0 };
-	nl.key = !lv ? (uint64_t)key << 32 : lv->depth == 1 ? lv->key | key : lv->key;
+	struct cross_level nl = { lv, r, si, { { { 0 } } }, lv ? lv->depth + 1 : 1,
+				  cross_key(lv, REF_MAKE(REF_INST, g->inst[i].rec)) };
 	inst_inverse(Q->A, si, &nl.inv);
 	struct trace lr;
 	trace_init(&lr, m34_point(&nl.inv, r->o), m34_dir(&nl.inv, r->d), r->tmin, r->tmax);
@@ -128,7 +134,7 @@ bool accel_cross_ref(const struct cross_query *Q, const struct group *g, uint32_
 			c.ref = c.key = ref;
 			c.t = t;
 			c.part = GEOM_PART_MAIN;
-			open = accel_cross_emit(Q, g, r, &c, g->sph[i].mat, lv);
+			open = accel_cross_emit(Q, g, r, &c, cross_ref_mat(g, ref), lv);
 			r->tmin = t;
 		}
 		r->tmin = tmin;
@@ -137,10 +143,9 @@ bool accel_cross_ref(const struct cross_query *Q, const struct group *g, uint32_
 	case REF_TRI:
 		return cross_tri(Q, g, ref, r, lv);
 	case REF_XPRIM: {
-		const struct xprim *x = &g->xp[i];
 		if (mailbox_seen(r, ref)) /* MAILBOX: every crossing was taken at the first test */
 			return true;
-		uint32_t mat = x->r > 0 || x->g->kind != PRIM_CSG ? x->mat : CROSS_MAT_UNKNOWN;
+		uint32_t mat = cross_ref_mat(g, ref);
 		const double tmin = r->tmin, tmax = r->tmax;
 		bool open = true;
 		for (;;) {
@@ -166,12 +171,8 @@ bool accel_cross_ref(const struct cross_query *Q, const struct group *g, uint32_
 static bool group_cross(const struct cross_query *Q, const struct group *g, struct trace *r,
 			const struct cross_level *lv)
 {
-	for (uint32_t k = 0; k < g->n_unb; k++) {
-		if (cancel_poll_every(k)) /* CANCELLATION: the list may be long */
-			return true;
-		if (!accel_cross_ref(Q, g, g->unb[k], r, lv))
-			return false;
-	}
+	if (!accel_cross_unb(Q, g, r, lv))
+		return false;
 	if (g->bvh.root_n) { /* the root is one leaf */
 		if (box_hit(g->bvh.root_b, g->center, r))
 			for (uint32_t k = 0; k < g->bvh.root_n; k++) {

@@ -949,12 +949,7 @@ static void group_cross4(const struct group *g, struct trace tr[4], uint32_t oct
 {
 	unsigned active = 0;
 	for (int i = 0; i < 4; i++) {
-		bool blocked = cross_hint_blocks(&Q[i], g, &tr[i]);
-		for (uint32_t k = 0; k < g->n_unb && !blocked; k++) {
-			if (cancel_poll_every(k))
-				break;
-			blocked = !accel_cross_ref(&Q[i], g, g->unb[k], &tr[i], NULL);
-		}
+		bool blocked = cross_hint_blocks(&Q[i], g, &tr[i]) || !accel_cross_unb(&Q[i], g, &tr[i], NULL);
 		active |= (unsigned)!blocked << i;
 	}
 	if (active) {

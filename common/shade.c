@@ -382,7 +382,7 @@ static bool may_cross_transparent(const struct shade_ctx *c, const struct ray *r
 	return false;
 }
 
-static bool cross_pass(const void *ctx, struct hit *h, struct accel_pass *p);
+static int cross_filter_init(struct shade_ctx *c);
 
 int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx **out,
 		  struct scene_error *err)
@@ -429,16 +429,8 @@ int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx
 		}
 	shader_eval(s, SCENE_NONE, &origin, &c->plain_default);
 	tbox_boxes(c);
-	if (!(c->opaque = calloc((size_t)s->n_materials + 1, 1)))
+	if (cross_filter_init(c))
 		goto oom;
-	for (uint32_t i = 0; i <= s->n_materials; i++) {
-		struct shader_mat m;
-		if (i < s->n_materials && s->materials[i].shader.kind != SHADER_NONE)
-			continue;
-		shader_eval(s, i < s->n_materials ? i : SCENE_NONE, &origin, &m);
-		c->opaque[i] = !(fmin(m.transparency, 1.0) > 0); /* cross_pass's test */
-	}
-	c->cross = (struct accel_cross_filter){ c->opaque, s->n_materials, cross_pass, c };
 	*out = c;
 	return 0;
 oom:
@@ -585,6 +577,34 @@ static bool cross_pass(const void *ctx, struct hit *h, struct accel_pass *p)
 	p->td = td;
 	return true;
 }
+
+/* c's SHADOW CROSSINGS filter: cross_pass, and the table of the materials
+ * it would always find opaque (without a shader, transparency 0; the
+ * default at n_materials), so that their hits are not completed. 0, or -1
+ * out of memory. */
+static int cross_filter_init(struct shade_ctx *c)
+{
+	const struct scene *s = c->s;
+	if (!(c->opaque = calloc((size_t)s->n_materials + 1, 1)))
+		return -1;
+	for (uint32_t i = 0; i <= s->n_materials; i++) {
+		uint32_t mi = i < s->n_materials ? i : SCENE_NONE;
+		if (mi != SCENE_NONE && s->materials[mi].shader.kind != SHADER_NONE)
+			continue;
+		struct shader_mat own;
+		const struct shader_mat *m = plain_mat(c, mi);
+		if (!m) { /* beyond SHADE_PLAIN */
+			const struct shader_point origin = { v3(0, 0, 0), 0, 0, v3(0, 0, 1) };
+			shader_eval(s, mi, &origin, &own);
+			m = &own;
+		}
+		c->opaque[i] = !(fmin(m->transparency, 1.0) > 0); /* cross_pass's test */
+	}
+	c->cross = (struct accel_cross_filter){ c->opaque, s->n_materials, cross_pass, c };
+	return 0;
+}
+
+const struct accel_cross_filter *shade_cross_filter(const struct shade_ctx *c) { return &c->cross; }
 
 /* The light an open segment's crossings x let through: their product in
  * order along the segment, 0 once it falls below SHADE_MIN_WEIGHT or at
@@ -1112,8 +1132,8 @@ static void shadow_packets(const struct shade_ctx *c, const struct surf sf[4], c
  * as one packet of crossings (accel_cross4), into t[j]; obj[j]: the object
  * ray j starts from (the first's names the hint). Not inlined, as
  * cross_one. */
-static __attribute__((noinline)) void cross_packet(const struct shade_ctx *c, const struct ray r[4], uint32_t i, const uint32_t obj[4],
-			 vec3 t[4])
+static __attribute__((noinline)) void cross_packet(const struct shade_ctx *c, const struct ray r[4], uint32_t i,
+						   const uint32_t obj[4], vec3 t[4])
 {
 	struct accel_crossings x[4];
 	bool open[4];

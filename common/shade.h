@@ -20,6 +20,11 @@ struct shade_ctx;
 int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx **out,
 		  struct scene_error *err);
 void shade_ctx_free(struct shade_ctx *c);
+/* The SHADOW CROSSINGS filter (accel.h) shading queries accel_cross with:
+ * a material's transparency x tran-colour at a hit (shaders evaluated
+ * there), its table of materials opaque everywhere. For benchmarks and
+ * tests that ask what shading asks; it lives as long as c. */
+const struct accel_cross_filter *shade_cross_filter(const struct shade_ctx *c);
 
 /*
  * Colour seen along an eye ray (linear RGB, not clamped). seed is the

@@ -10,8 +10,9 @@
  *   unbounded reference), instances of a define (members inheriting the
  *   instance's material, one nested a level deeper), a chequered sphere
  *   whose squares are glass and opaque (the filter's callback decides),
- *   and opaque spheres; once with the opaque materials in the filter's
- *   table, once with the callback answering for them.
+ *   and opaque spheres, through shading's filter (shade_cross_filter);
+ *   once with its table of opaque materials, once with the callback
+ *   answering for them.
  * - Packets (accel_cross4) give every ray what accel_cross gives it, bit
  *   for bit, keys included.
  * - The list's bounds: 64 crossings fit, a 65th blocks; surfaces at one t
@@ -24,7 +25,7 @@
 #include "common/accel.h"
 #include "common/parse.h"
 #include "common/rng.h"
-#include "common/shader.h"
+#include "common/shade.h"
 #include "tests/unit/check.h"
 
 static const char SCENE[] =
@@ -59,23 +60,21 @@ static const char SCENE[] =
 	"object pair ; x-rotate 40 translate (1.4 -0.2 1) material called gb ; ;\n"
 	"object lens ; z-rotate 70 translate (-1.2 -1.1 0.3) ;\n";
 
-static const struct scene *S;
-
-/* The test's filter: the material's transparency and tran-colour at the
- * hit (shaders evaluated there), as shading's. */
-static bool pass(const void *ctx, struct hit *h, struct accel_pass *p)
+/* The filter shading queries with (shade_cross_filter), for scene s and
+ * accel a: its context in *ctx (to free); with table none (n_materials + 1
+ * zeros) every hit goes through the callback. */
+static struct accel_cross_filter filter_of(const struct scene *s, const struct accel *a, struct shade_ctx **ctx,
+					   const uint8_t *none)
 {
-	const struct accel *a = ctx;
-	accel_hit_surface(a, h);
-	struct shader_point pt = { h->mp, h->u, h->v, h->n };
-	struct shader_mat m;
-	shader_eval(S, h->material, &pt, &m);
-	double td = fmin(m.transparency, 1.0);
-	if (!(td > 0))
-		return false;
-	p->col = v3_max(m.tran_colour, v3(0, 0, 0));
-	p->td = td;
-	return true;
+	struct scene_error err;
+	if (shade_ctx_new(s, a, ctx, &err)) {
+		fprintf(stderr, "shading: %s\n", err.msg);
+		abort();
+	}
+	struct accel_cross_filter f = *shade_cross_filter(*ctx);
+	if (none)
+		f.opaque = none;
+	return f;
 }
 
 /* The reference: closest hit after closest hit along the same ray. */
@@ -183,8 +182,8 @@ static void bounds(void)
 	for (int n = 63; n <= 65; n++) {
 		struct scene *s;
 		struct accel *a = stack_of(n, &s);
-		S = s;
-		struct accel_cross_filter f = { none, s->n_materials, pass, a };
+		struct shade_ctx *sc;
+		struct accel_cross_filter f = filter_of(s, a, &sc, none);
 		struct ray r[4];
 		for (int j = 0; j < 4; j++) /* off the diagonal edge */
 			r[j] = (struct ray){ v3(0.3 + 0.01 * j, -0.2, -1), v3(0, 0, 3), 0, 1 };
@@ -205,6 +204,7 @@ static void bounds(void)
 		CHECK(open == (n <= ACCEL_CROSS_MAX));
 		if (open)
 			CHECK(x.n == n);
+		shade_ctx_free(sc);
 		accel_free(a);
 		scene_free(s);
 	}
@@ -235,9 +235,9 @@ static bool tie_rays(const char *t, double z1, bool walks, struct accel_crossing
 {
 	struct scene *s;
 	struct accel *a = tie_scene(t, &s);
-	S = s;
-	uint8_t none[8] = { 0 };
-	struct accel_cross_filter f = { none, s->n_materials, pass, a };
+	static const uint8_t none[8] = { 0 };
+	struct shade_ctx *sc;
+	struct accel_cross_filter f = filter_of(s, a, &sc, none);
 	static struct accel_crossings x4[4], y;
 	uint32_t hint = ACCEL_NO_HINT;
 	struct ray r[4];
@@ -253,6 +253,7 @@ static bool tie_rays(const char *t, double z1, bool walks, struct accel_crossing
 			open0 = open;
 	}
 	accel_cross(a, &r[0], &f, x, &hint);
+	shade_ctx_free(sc);
 	accel_free(a);
 	scene_free(s);
 	return open0;
@@ -282,20 +283,18 @@ static void ties(void)
 	CHECK(tie_rays(U, 1, true, &x) && x.n == 1 && x.x[0].p.td == 0.5);
 	/* two surfaces of an instance within an instance: the first member
 	 * written (ga's triangle), as the closest hit takes it */
-	static const char V[] = MATS "define object name inner\n"
-				     "  object triangle a (-5 -5 0) b (5 -5 0) c (0 5 0) ; material called ga ; ;\n"
-				     "  object plane position (0 0 0) normal (0 0 1) ; material called gb ; ;\n"
-				     "; ;\n"
-				     "define object name mid object inner ; ; ; ;\n"
-				     "object mid ; ;\n";
+#define INNER                                                                                                  \
+	MATS "define object name inner\n"                                                                      \
+	     "  object triangle a (-5 -5 0) b (5 -5 0) c (0 5 0) ; material called ga ; ;\n"                    \
+	     "  object plane position (0 0 0) normal (0 0 1) ; material called gb ; ;\n"                         \
+	     "; ;\n"
+	static const char V[] = INNER "define object name mid object inner ; ; ; ;\n"
+				      "object mid ; ;\n";
 	CHECK(tie_rays(V, 1, true, &x) && x.n == 1 && x.x[0].p.td == 0.5);
 	/* the same a level less deep */
-	static const char W[] = MATS "define object name inner\n"
-				     "  object triangle a (-5 -5 0) b (5 -5 0) c (0 5 0) ; material called ga ; ;\n"
-				     "  object plane position (0 0 0) normal (0 0 1) ; material called gb ; ;\n"
-				     "; ;\n"
-				     "object inner ; ;\n";
+	static const char W[] = INNER "object inner ; ;\n";
 	CHECK(tie_rays(W, 1, true, &x) && x.n == 1 && x.x[0].p.td == 0.5);
+#undef INNER
 #undef MATS
 }
 
@@ -308,19 +307,19 @@ int main(void)
 		fprintf(stderr, "scene: %s\n", err.msg);
 		return 1;
 	}
-	S = s;
-	uint8_t *opaque = calloc(s->n_materials + 1, 1), *none = calloc(s->n_materials + 1, 1);
-	for (uint32_t m = 0; m < s->n_materials; m++) /* dark, and the default below */
-		opaque[m] = s->materials[m].shader.kind == SHADER_NONE && s->materials[m].transparency <= 0;
-	opaque[s->n_materials] = 1;
-	struct accel_cross_filter f1 = { opaque, s->n_materials, pass, a }, f2 = { none, s->n_materials, pass, a };
+	uint8_t *none = calloc(s->n_materials + 1, 1);
+	struct shade_ctx *sc1, *sc2;
+	struct accel_cross_filter f1 = filter_of(s, a, &sc1, NULL), f2 = filter_of(s, a, &sc2, none);
+	/* shading's table knows dark and the default as opaque, not the chequers */
+	CHECK(f1.opaque[2] && f1.opaque[s->n_materials] && !f1.opaque[0] && !f1.opaque[3]);
 	printf("opaque materials in the table:\n");
 	against_walk(a, &f1, 11);
 	printf("every material through the callback:\n");
 	against_walk(a, &f2, 12);
+	shade_ctx_free(sc1);
+	shade_ctx_free(sc2);
 	accel_free(a);
 	scene_free(s);
-	free(opaque);
 	free(none);
 	bounds();
 	ties();
