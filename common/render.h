@@ -55,8 +55,10 @@ int renderer_set_size(struct renderer *r, uint32_t w, uint32_t h);
  * 3: shadow rays through transparent surfaces take every surface on the
  *    straight segment to the light (SHADOW CROSSINGS, accel.h), where they
  *    stepped from hit to hit, each step offset and aimed anew.
+ * 4: the Phong highlight's power is xm_pow_lite (LITE POW, docs/maths.md),
+ *    within a few ulps of xm_pow's value instead of the same bits.
  */
-#define RENDER_PIXEL_REV 3
+#define RENDER_PIXEL_REV 4
 
 /*
  * What a tile's pixels are: chosen per render from the output format (the

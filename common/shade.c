@@ -651,7 +651,7 @@ static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp, uint32_t l
 static double maxabs_nan(vec3 a) { return maxabs(a) + 0 * (a.x + a.y + a.z); }
 
 /*
- * POW SKIP: whether direct() needs a sample's highlight hl = xm_pow(rv,
+ * POW SKIP: whether direct() needs a sample's highlight hl = xm_pow_lite(rv,
  * power) to get its term in (kcd ndotl + kcs hl) to the bit. With ub >= hl
  * (xm_pow_ub) and b = max|kcs| ub >= every channel's |kcs hl| (rounded
  * products and sums of magnitudes are monotonic):
@@ -659,7 +659,7 @@ static double maxabs_nan(vec3 a) { return maxabs(a) + 0 * (a.x + a.y + a.z); }
  *     channel at its largest, so direct() skips the sample whatever hl is;
  *  0: b is below an eighth of an ulp of every channel's kcd ndotl (normal
  *     doubles), so each sum rounds to kcd ndotl, as it does with hl = 0;
- *  1: xm_pow must be called.
+ *  1: xm_pow_lite must be called.
  * Glass (no diffuse, power 250: examples/exam_004) is mostly -1, diffuse
  * surfaces with high powers often 0. Powers below 32 on surfaces whose
  * diffuse weight kd is above 1/64 (weighted) rarely give either: the tests
@@ -688,11 +688,11 @@ static inline vec3 phong_term(vec3 in, vec3 kcd, vec3 kcs, double ndotl, double 
 /*
  * POW AFTER SHADOW: whether a sample's term passes direct()'s cut whatever
  * its highlight hl >= 0 is, so that its shadow ray is traced either way and
- * xm_pow can wait for the answer (a blocked ray needs no highlight: balls_s4's
+ * xm_pow_lite can wait for the answer (a blocked ray needs no highlight: balls_s4's
  * single shadow rays are about half blocked). With every factor >= 0 each
  * rounded channel of phong_term is at least its value at hl = 0, computed
  * here with the same function; a NaN or a
- * negative factor answers false (xm_pow first, as before).
+ * negative factor answers false (xm_pow_lite first, as before).
  */
 static bool passes_without(vec3 in, vec3 kcd, vec3 kcs, double ndotl, double weight, double lim)
 {
@@ -767,7 +767,7 @@ static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx 
 					if (need && traced && passes_without(in, kcd, kcs, ndotl, weight, cut * n_samples))
 						later = true; /* POW AFTER SHADOW */
 					else if (need)
-						hl = xm_pow(rv, m->spec_power);
+						hl = xm_pow_lite(rv, m->spec_power);
 				}
 			}
 			vec3 term = phong_term(in, kcd, kcs, ndotl, hl);
@@ -778,7 +778,7 @@ static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx 
 				if (maxc(t) <= 0)
 					continue;
 				if (later) {
-					term = phong_term(in, kcd, kcs, ndotl, xm_pow(rv, m->spec_power));
+					term = phong_term(in, kcd, kcs, ndotl, xm_pow_lite(rv, m->spec_power));
 				}
 				term = v3_mul(term, t);
 			}

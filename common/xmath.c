@@ -863,6 +863,54 @@ double xm_log(double x)
 	return rh;
 }
 
+/*
+ * LITE POW: log(x) in one double (x > 0 finite, x != 1): log_core's
+ * reduction (x = 2^k m, m = F (1 + q) with F = j/128 from the table), its
+ * sums rounded once each instead of carried as double-doubles, and
+ * log1p(q) to q^6 (|q| < 2^-7.5: the rest is below 2^-55 of q).
+ */
+static inline double log_lite(double x)
+{
+	uint64_t ix = dbits(x);
+	int k = 0;
+	if (ix >> 52 == 0) { /* subnormal */
+		x *= 0x1p54;
+		ix = dbits(x);
+		k = -54;
+	}
+	k += (int)(ix >> 52) - 1023;
+	double m = bits_d((ix & 0xfffffffffffffull) | 0x3ffull << 52); /* [1, 2) */
+	if (m > 0x1.6a09e667f3bcdp+0) {
+		m *= 0.5;
+		k++;
+	}
+	int j = (int)(m * 128 + 0.5);
+	double f = m - j * 0x1p-7, q = f * inv_tab[j - 90]; /* f exact */
+	double q2 = q * q;
+	double l1p = q + (q2 * (q * poly(log1p_c, 4, q) - 0.5));
+	double kd = k;
+	return (kd * LN2_HI + log_tab[j - 90][0]) + (l1p + (kd * LN2_LO + log_tab[j - 90][1]));
+}
+
+double xm_pow_lite(double x, double y)
+{
+	uint64_t ix = dbits(x), iy = dbits(y) & 0x7fffffffffffffffull;
+	/* 0 < x < inf, x != 1, 0 < |y| < 2^20 */
+	if (ix - 1 < 0x7fefffffffffffffull && iy - 1 < 0x412fffffffffffffull && x != 1) {
+		if (y == 1)
+			return x;
+		if (y == 2)
+			return x * x;
+		double z = y * log_lite(x);
+		if (z > 709)
+			return xm_pow(x, y); /* near overflow: the careful one decides */
+		if (z < -744)
+			return z < -760 ? 0.0 : xm_pow(x, y);
+		return exp_core(z, 0);
+	}
+	return xm_pow(x, y);
+}
+
 /* sign * x^y for x > 0 finite, x != 1, 0 < |y| < 2^64 */
 static inline double pow_core(double x, double y, double sign)
 {

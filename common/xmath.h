@@ -48,6 +48,14 @@ double xm_exp(double x);
 double xm_log(double x);
 double xm_pow(double x, double y);
 /*
+ * x^y as exp(y log x) with the logarithm and the product in plain doubles
+ * (LITE POW, docs/maths.md): within 4 + 6|y log x| ulps of x^y
+ * instead of xm_pow's one, for about half the instructions; xm_pow itself
+ * beyond |y| < 2^20 and near the ends of the range. For the Phong
+ * highlight, whose value is scaled and summed into a colour.
+ */
+double xm_pow_lite(double x, double y);
+/*
  * A cheap upper bound on xm_pow(x, y) for 0 < x < 1 and 0 <= y < 2^64: a
  * power of two, at most 4 e^(y w^3 / (3 (1 - w))) times x^y (w = 1 - x:
  * tight near x = 1, where highlights are); INFINITY for any other argument.

@@ -271,6 +271,62 @@ static void test_pow_ub(void)
 	CHECK(xm_pow_ub(0.5, 2000) == 0x1p-999);
 }
 
+/*
+ * xm_pow_lite (LITE POW): within 4 + 6|y log x| ulps of the exact x^y
+ * (libm's long double powl, where it has 64 bits) over xm_pow's arguments
+ * and highlights' (0 < x < 1, x near 1, powers to 2000) where the result
+ * is normal; never above xm_pow_ub for 0 < x < 1 (the POW SKIP's proof
+ * needs hl <= ub); and xm_pow's very bits wherever it defers to it (every
+ * edge pair outside its domain: zeros, negatives, 1, infinities, NaN, y
+ * of 2^20 or more).
+ */
+static void test_pow_lite(void)
+{
+	long over = 0, above_ub = 0, not_deferred = 0, n = 0;
+	double worst = 0, worst_x = 0, worst_y = 0;
+	for (long i = 0; i < XM_N; i++) {
+		double x, y;
+		switch (i % 4) {
+		case 0: gen_pow(i, &x, &y); break;
+		case 1: x = urand(0, 1); y = urand(1, 300); break;
+		case 2: x = 1 - logrand(-53, -1, 0); y = (double)(rnd64() % 2001) + urand(0, 1); break;
+		default: x = logrand(-1074, 0, 0); y = urand(0.5, 8); break;
+		}
+		double p = xm_pow_lite(x, y);
+		if (x > 0 && x < 1 && !(p <= xm_pow_ub(x, y)) && above_ub++ < 5)
+			fprintf(stderr, "xm_pow_lite(%a, %a) = %a above xm_pow_ub\n", x, y, p);
+		long double e = powl(x, y);
+		if (LDBL_MANT_DIG < 64 || !(fabsl(e) >= DBL_MIN && fabsl(e) <= DBL_MAX) || !isfinite(p))
+			continue;
+		n++;
+		int ex;
+		frexp((double)e, &ex);
+		double err = (double)(fabsl((long double)p - e) / ldexp(1.0, ex - 53));
+		double r = err / (4 + 6 * fabs(y * log(fabs(x))));
+		if (r > worst)
+			worst = r, worst_x = x, worst_y = y;
+		if (r > 1 && over++ < 5)
+			fprintf(stderr, "xm_pow_lite(%a, %a): %.1f ulps\n", x, y, err);
+	}
+	for (size_t i = 0; i < N_EDGES; i++)
+		for (size_t j = 0; j < N_EDGES; j++) {
+			double x = edges[i], y = edges[j];
+			if (x > 0 && x < INFINITY && x != 1 && fabs(y) > 0 && fabs(y) < 0x1p20)
+				continue; /* its own domain */
+			double a = xm_pow_lite(x, y), b = xm_pow(x, y);
+			if (memcmp(&a, &b, sizeof a) != 0 && !(isnan(a) && isnan(b)) && not_deferred++ < 5)
+				fprintf(stderr, "xm_pow_lite(%a, %a) = %a, xm_pow %a\n", x, y, a, b);
+		}
+	printf("pow_lite %6ld args  %ld beyond 4 + 6|y log x| ulps (worst %.2f of it at %a, %a)  %ld above pow_ub  %ld edges not xm_pow's\n",
+	       n, over, worst, worst_x, worst_y, above_ub, not_deferred);
+	CHECK(LDBL_MANT_DIG < 64 || n > XM_N / 2);
+	CHECK(over == 0);
+	CHECK(above_ub == 0);
+	CHECK(not_deferred == 0);
+	CHECK(xm_pow_lite(0.25, 2) == 0.0625 && xm_pow_lite(0.3, 1) == 0.3);
+	CHECK(fabs(xm_pow_lite(0.5, 3) - 0.125) <= 0x1p-53 * 0.125 * 4 * 8); /* 3 ln 2: within 16 ulps */
+}
+
 static double sincos_s(double x)
 {
 	double s, c;
@@ -300,5 +356,6 @@ int main(void)
 	run2("atan2", xm_atan2, atan2, atan2l, gen_atan2, 1, 0.75);
 	run2("pow", xm_pow, pow, powl, gen_pow, 1, 0.8);
 	test_pow_ub();
+	test_pow_lite();
 	TEST_MAIN_END();
 }
