@@ -431,109 +431,62 @@ static __attribute__((noinline)) bool brute_hit(const struct accel *A, const str
 
 /* ---- single-ray traversals ---------------------------------------------------------- */
 
-/* The BVH traversal of g's bounded references: nearest child first,
- * subtrees behind the closest hit so far popped and dropped. Same contract
- * as ref_test. chunked: g has big leaves (group.big_leaf), tested
- * ACCEL_LEAF_CHUNK references at a time (CANCELLATION); a constant, so the
- * common copies have no test (it cost 1% of single rays). */
-static inline __attribute__((always_inline)) bool bvh_hit(const struct accel *A, const struct group *g,
-							   struct trace *r, struct cand *best, const struct ray4 *qp,
-							   const uint32_t oct, const bool chunked)
+/* bvh_hit (accel_hit.h) with SSE node tests */
+#define BVH_HIT bvh_hit
+#define BVH_ATTR
+#define BVH_Q struct ray4
+#define BVH_SPAN tspan
+#define BVH_SPAN_OF tspan_of
+#define BVH_NODE(nodes8, nodes, idx, q, oct, tmin, tmax, tn, m, ci, cn)                                          \
+	do {                                                                                                    \
+		if (nodes8) {                                                                                   \
+			const struct bvh8 *nd_ = &(nodes8)[idx];                                                \
+			(m) = node8_hit(nd_, q, oct, tmin, tmax, tn);                                           \
+			(ci) = nd_->idx, (cn) = nd_->n;                                                         \
+		} else {                                                                                        \
+			const struct bvh4 *nd_ = &(nodes)[idx];                                                 \
+			(m) = node4_hit(nd_, q, oct, tmin, tmax, tn);                                           \
+			(ci) = nd_->idx, (cn) = nd_->n;                                                         \
+		}                                                                                               \
+	} while (0)
+#include "common/accel_hit.h"
+
+#if ACCEL_AVX2
+/* bvh_hit (accel_hit.h) with AVX2 node tests, on WIDE NODES only */
+#define BVH_HIT bvh_hit_avx2
+#define BVH_ATTR __attribute__((target("avx2")))
+#define BVH_Q struct ray8
+#define BVH_SPAN __m256
+#define BVH_SPAN_OF span8_of
+#define BVH_NODE(nodes8, nodes, idx, q, oct, tmin, tmax, tn, m, ci, cn)                                          \
+	do {                                                                                                    \
+		const struct bvh8 *nd_ = &(nodes8)[idx];                                                        \
+		(void)(nodes);                                                                                  \
+		(m) = node8_hit_avx2(nd_, q, oct, tmin, tmax, tn);                                              \
+		(ci) = nd_->idx, (cn) = nd_->n;                                                                 \
+	} while (0)
+#include "common/accel_hit.h"
+
+/* group_hit's tree walk in AVX2 (g->bvh.nodes8, no big leaves): one copy
+ * of the loop per octant, as the SSE one; a call of its own, since a
+ * function compiled for AVX2 cannot be inlined into one that is not. */
+static __attribute__((noinline, target("avx2"))) bool bvh_octants_avx2(const struct accel *A, const struct group *g,
+									struct trace *r, struct cand *best)
 {
-	bool found = false;
-	const struct bvh4 *nodes = g->bvh.nodes;
-	const struct bvh8 *nodes8 = g->bvh.nodes8; /* WIDE NODES: used when there */
-	const struct ray4 q = *qp;
-	const tspan tmin = tspan_of(box_tmin(r->tmin * q.tscale));
-	float tmax = box_tmax(r->tmax * q.tscale);
-	tspan tmax4 = tspan_of(tmax);
-	struct {
-		uint32_t idx, n;
-		float t;
-	} stack[7 * BVH_MAX_DEPTH + 8]; /* up to 7 children a level (WIDE NODES), and a chunk's rest */
-	int sp = 0;
-	uint32_t idx = 0, n = 0;
-	uint32_t polls = ACCEL_POLL_POPS;
-	struct tri1 q1; /* TRIANGLE PRE-TEST, set up at the first block */
-	bool q1_ready = false;
-	for (;;) {
-		if (n) {
-			if (n & LEAF_BLOCK) {
-				found |= block_hit(g, &g->tblk[idx], n & ~LEAF_BLOCK, r, best, &q1, &q1_ready);
-			} else {
-				if (chunked && n > ACCEL_LEAF_CHUNK) { /* CANCELLATION: the rest later */
-					stack[sp].idx = idx + ACCEL_LEAF_CHUNK;
-					stack[sp].n = n - ACCEL_LEAF_CHUNK;
-					stack[sp++].t = 0;
-					n = ACCEL_LEAF_CHUNK;
-				}
-				for (uint32_t k = 0; k < n; k++)
-					found |= ref_test(A, g, group_ref(g, idx + k), r, best, false);
-			}
-			tmax = box_tmax(r->tmax * q.tscale);
-			tmax4 = tspan_of(tmax);
-		} else {
-			float tn[8];
-			int m;
-			const uint32_t *ci, *cn; /* the node's idx[] and n[] */
-			if (nodes8) {
-				const struct bvh8 *nd = &nodes8[idx];
-				m = node8_hit(nd, &q, oct, tmin, tmax4, tn);
-				ci = nd->idx, cn = nd->n;
-			} else {
-				const struct bvh4 *nd = &nodes[idx];
-				m = node4_hit(nd, &q, oct, tmin, tmax4, tn);
-				ci = nd->idx, cn = nd->n;
-			}
-			if (m && !(m & (m - 1))) { /* one child */
-				int c = __builtin_ctz((unsigned)m);
-				idx = ci[c];
-				n = cn[c];
-				continue;
-			}
-			int m2 = m & (m - 1); /* m without its lowest child */
-			if (m2 && !(m2 & (m2 - 1))) { /* two children */
-				int c0 = __builtin_ctz((unsigned)m), c1 = __builtin_ctz((unsigned)m2);
-				if (tn[c0] > tn[c1]) { /* the nearer first; ties keep slot order */
-					int tc = c0;
-					c0 = c1, c1 = tc;
-				}
-				stack[sp].idx = ci[c1];
-				stack[sp].n = cn[c1];
-				stack[sp++].t = tn[c1];
-				idx = ci[c0];
-				n = cn[c0];
-				continue;
-			}
-			if (m) { /* nearest first; the others pushed farthest first */
-				int cs[8], k = children_by_entry(m, tn, cs);
-				for (int j = k - 1; j >= 1; j--) {
-					stack[sp].idx = ci[cs[j]];
-					stack[sp].n = cn[cs[j]];
-					stack[sp++].t = tn[cs[j]];
-				}
-				idx = ci[cs[0]];
-				n = cn[cs[0]];
-				continue;
-			}
-		}
-		if (__builtin_expect(--polls == 0, 0)) { /* CANCELLATION */
-			polls = ACCEL_POLL_POPS;
-			if (cancel_poll())
-				return found;
-		}
-		/* pop the next subtree still in front of the closest hit */
-		for (;;) {
-			if (sp == 0)
-				return found;
-			sp--;
-			if (stack[sp].t <= tmax)
-				break;
-		}
-		idx = stack[sp].idx;
-		n = stack[sp].n;
+	struct ray8 q8;
+	ray8_init(&q8, r, g->center);
+	switch (q8.oct) {
+	case 0: return bvh_hit_avx2(A, g, r, best, &q8, 0, false);
+	case 1: return bvh_hit_avx2(A, g, r, best, &q8, 1, false);
+	case 2: return bvh_hit_avx2(A, g, r, best, &q8, 2, false);
+	case 3: return bvh_hit_avx2(A, g, r, best, &q8, 3, false);
+	case 4: return bvh_hit_avx2(A, g, r, best, &q8, 4, false);
+	case 5: return bvh_hit_avx2(A, g, r, best, &q8, 5, false);
+	case 6: return bvh_hit_avx2(A, g, r, best, &q8, 6, false);
+	default: return bvh_hit_avx2(A, g, r, best, &q8, 7, false);
 	}
 }
+#endif
 
 /* bvh_hit through a tree with big leaves: one copy for every octant (such
  * trees come only from the builder's depth limit). */
@@ -560,6 +513,10 @@ static bool group_hit(const struct accel *A, const struct group *g, struct trace
 				found |= ref_test(A, g, group_ref(g, g->bvh.root_idx + k), r, &best, false);
 	} else if (__builtin_expect(g->big_leaf, 0)) {
 		found |= bvh_hit_chunked(A, g, r, &best);
+#if ACCEL_AVX2
+	} else if (A->avx2 && g->bvh.nodes8) {
+		found |= bvh_octants_avx2(A, g, r, &best);
+#endif
 	} else if (g->bvh.n_nodes4) {
 		struct ray4 q4;
 		ray4_init(&q4, r, g->center);
@@ -776,6 +733,18 @@ bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ra
 	}
 	*hint = ACCEL_NO_HINT;
 	return false;
+}
+
+bool accel_use_avx2(void)
+{
+#if ACCEL_AVX2
+	const char *e = getenv("PORTRAY_SIMD");
+	if (e && strcmp(e, "sse2") == 0)
+		return false;
+	return __builtin_cpu_supports("avx2");
+#else
+	return false;
+#endif
 }
 
 void accel_get_stats(const struct accel *a, struct accel_stats *st) { *st = a->st; }

@@ -188,6 +188,65 @@ static inline __attribute__((always_inline)) int node8_hit(const struct bvh8 *nd
 	return slab4(b, 8, q, oct, tmin, tmax, tn) | slab4(b + 4, 8, q, oct, tmin, tmax, tn + 4) << 4;
 }
 
+/*
+ * WIDE NODES IN AVX2. On x86-64 the single ray's closest-hit walk
+ * (bvh_hit, accel_hit.h) has a second copy whose node test takes a wide
+ * node's eight children in one 256-bit pass instead of node8_hit's two
+ * halves, in functions compiled for AVX2 and chosen at run time where the
+ * CPU has it (accel_use_avx2). Each lane's arithmetic is node8_hit's:
+ * the same float subtraction, product, max and min in the same order, and
+ * an ordered <= (no lane sees NaN differently), so the mask and the entry
+ * distances are the same bits and both copies walk the same nodes. The
+ * build itself needs no -mavx2: only these functions are compiled for it.
+ */
+#if defined(__x86_64__) && defined(__SSE2__) && (defined(__GNUC__) || defined(__clang__)) && !defined(PORTRAY_NO_AVX2)
+#define ACCEL_AVX2 1
+#include <immintrin.h>
+
+struct ray8 {
+	__m256 o[3], inv_near[3], inv_far[3];
+	uint32_t oct;
+	double tscale;
+};
+
+static inline __attribute__((always_inline, target("avx2"))) void ray8_init(struct ray8 *q, const struct trace *r,
+									    vec3 center)
+{
+	struct ray_box b;
+	ray_box_init(&b, r, center);
+	q->tscale = b.tscale;
+	q->oct = b.oct;
+	for (uint32_t k = 0; k < 3; k++) {
+		q->o[k] = _mm256_set1_ps(b.o[k]);
+		q->inv_near[k] = _mm256_set1_ps(b.inv_near[k]);
+		q->inv_far[k] = _mm256_set1_ps(b.inv_far[k]);
+	}
+}
+
+static inline __attribute__((always_inline, target("avx2"))) __m256 span8_of(float t) { return _mm256_set1_ps(t); }
+
+/* node8_hit in one pass: bit c of the mask for child c, tn[0..8) */
+static inline __attribute__((always_inline, target("avx2"))) int node8_hit_avx2(const struct bvh8 *nd,
+										const struct ray8 *q, uint32_t oct,
+										__m256 tmin, __m256 tmax, float tn[8])
+{
+	const float *b = (const float *)(const void *)nd;
+	const uint32_t near[3] = { 24 * (oct & 1), 8 + 24 * (oct >> 1 & 1), 16 + 24 * (oct >> 2 & 1) };
+	const uint32_t far[3] = { 24 * (~oct & 1), 8 + 24 * (~oct >> 1 & 1), 16 + 24 * (~oct >> 2 & 1) };
+	__m256 t0 = tmin, t1 = tmax;
+	for (int k = 0; k < 3; k++) {
+		__m256 tnear = _mm256_mul_ps(_mm256_sub_ps(_mm256_loadu_ps(b + near[k]), q->o[k]), q->inv_near[k]);
+		__m256 tfar = _mm256_mul_ps(_mm256_sub_ps(_mm256_loadu_ps(b + far[k]), q->o[k]), q->inv_far[k]);
+		t0 = _mm256_max_ps(t0, tnear);
+		t1 = _mm256_min_ps(t1, tfar);
+	}
+	_mm256_storeu_ps(tn, t0);
+	return _mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ));
+}
+#else
+#define ACCEL_AVX2 0
+#endif
+
 #define SLAB_WIDEN 4.5e-16 /* 1 + 2 gamma(3) for doubles, rounded up (Ize 2013) */
 
 /* The same test in double on one box of six floats (a root that is a leaf). */

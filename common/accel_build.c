@@ -1005,6 +1005,7 @@ int accel_build(const struct scene *s, struct accel **out, struct scene_error *e
 	if (!A)
 		return scene_errorf(err, ERRLEVEL_FATAL, "error: out of memory building the acceleration structure");
 	A->s = s;
+	A->avx2 = accel_use_avx2();
 	A->dgroup = calloc((size_t)s->n_defines + 1, sizeof *A->dgroup);
 	if (!A->dgroup) {
 		accel_free(A);

@@ -213,8 +213,15 @@ struct accel {
 	/* the inverses of the scene's instance 3x3 parts (scene.lins), as
 	 * m34_invert makes them; m[0][3] NaN: singular (owned) */
 	mat34 *lin_inv;
+	bool avx2; /* WIDE NODES IN AVX2 (accel_box.h): the CPU has it, PORTRAY_SIMD does not say sse2 */
 	struct accel_stats st;
 };
+
+/* Whether single rays take the AVX2 node tests (WIDE NODES IN AVX2,
+ * accel_box.h): the CPU and its OS support AVX2 and the environment's
+ * PORTRAY_SIMD is not "sse2" (which keeps the SSE2 ones, to compare them:
+ * the two give the same bytes). Read once. */
+bool accel_use_avx2(void);
 
 /*
  * The inverse transform (parent -> define space) of instance record si,
