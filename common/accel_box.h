@@ -108,6 +108,17 @@ static inline void ray4_init(struct ray4 *q, const struct trace *r, vec3 center)
 static inline float box_tmin(double x) { return (float)(x * (1 - 0x1p-22) - 0x1p-140); }
 static inline float box_tmax(double x) { return (float)(x * (1 + 0x1p-22) + 0x1p-140); }
 
+/* The offsets of each axis' near and far planes in a node whose bounds
+ * are rows of w floats (lo[3][w] then hi[3][w]: lo[k] at w k, hi[k] at
+ * w (3 + k)), by the ray's octant: the "sign" trick of slab4. */
+static inline __attribute__((always_inline)) void slab_planes(uint32_t w, uint32_t oct, uint32_t near[3], uint32_t far[3])
+{
+	for (uint32_t k = 0; k < 3; k++) {
+		near[k] = k * w + 3 * w * (oct >> k & 1);
+		far[k] = k * w + 3 * w * (~oct >> k & 1);
+	}
+}
+
 /*
  * Slab test of four children against [tmin, tmax] (box space, tmin >= 0):
  * slab4, and node4_hit for a node's. Returns a mask (bit c: child c may be hit) and the widened
@@ -138,9 +149,8 @@ static inline tspan tspan_of(float t) { return t; }
 static inline __attribute__((always_inline)) int slab4(const float *b, const uint32_t w, const struct ray4 *q,
 							uint32_t oct, tspan tmin, tspan tmax, float tn[4])
 {
-	/* lo[k] at w k, hi[k] at w (3 + k); the near plane by the octant */
-	const uint32_t near[3] = { 3 * w * (oct & 1), w + 3 * w * (oct >> 1 & 1), 2 * w + 3 * w * (oct >> 2 & 1) };
-	const uint32_t far[3] = { 3 * w * (~oct & 1), w + 3 * w * (~oct >> 1 & 1), 2 * w + 3 * w * (~oct >> 2 & 1) };
+	uint32_t near[3], far[3];
+	slab_planes(w, oct, near, far);
 #if defined(__SSE2__)
 	__m128 t0 = tmin, t1 = tmax;
 	for (int k = 0; k < 3; k++) {
@@ -231,8 +241,8 @@ static inline __attribute__((always_inline, target("avx2"))) int node8_hit_avx2(
 										__m256 tmin, __m256 tmax, float tn[8])
 {
 	const float *b = (const float *)(const void *)nd;
-	const uint32_t near[3] = { 24 * (oct & 1), 8 + 24 * (oct >> 1 & 1), 16 + 24 * (oct >> 2 & 1) };
-	const uint32_t far[3] = { 24 * (~oct & 1), 8 + 24 * (~oct >> 1 & 1), 16 + 24 * (~oct >> 2 & 1) };
+	uint32_t near[3], far[3];
+	slab_planes(8, oct, near, far);
 	__m256 t0 = tmin, t1 = tmax;
 	for (int k = 0; k < 3; k++) {
 		__m256 tnear = _mm256_mul_ps(_mm256_sub_ps(_mm256_loadu_ps(b + near[k]), q->o[k]), q->inv_near[k]);

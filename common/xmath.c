@@ -810,7 +810,9 @@ double xm_exp(double x)
 
 /* log(x) as a double-double *rh + *rl, x > 0 finite; relative error below
  * 2^-68 */
-static inline void log_core(double x, double *rh, double *rl)
+/* x = 2^k m with m in [sqrt 1/2, sqrt 2] (x > 0 finite, subnormal too):
+ * m exact, k into *kp */
+static inline double log_reduce(double x, int *kp)
 {
 	uint64_t ix = dbits(x);
 	int k = 0;
@@ -825,6 +827,14 @@ static inline void log_core(double x, double *rh, double *rl)
 		m *= 0.5;
 		k++;
 	}
+	*kp = k;
+	return m;
+}
+
+static inline void log_core(double x, double *rh, double *rl)
+{
+	int k;
+	double m = log_reduce(x, &k);
 	int j = (int)(m * 128 + 0.5);
 	double F = j * 0x1p-7, f = m - F, inv = inv_tab[j - 90]; /* f exact */
 	/* q = f / F: a product with 1/F rounded, then the remainder (exact) times it */
@@ -871,19 +881,8 @@ double xm_log(double x)
  */
 static inline double log_lite(double x)
 {
-	uint64_t ix = dbits(x);
-	int k = 0;
-	if (ix >> 52 == 0) { /* subnormal */
-		x *= 0x1p54;
-		ix = dbits(x);
-		k = -54;
-	}
-	k += (int)(ix >> 52) - 1023;
-	double m = bits_d((ix & 0xfffffffffffffull) | 0x3ffull << 52); /* [1, 2) */
-	if (m > 0x1.6a09e667f3bcdp+0) {
-		m *= 0.5;
-		k++;
-	}
+	int k;
+	double m = log_reduce(x, &k);
 	int j = (int)(m * 128 + 0.5);
 	double f = m - j * 0x1p-7, q = f * inv_tab[j - 90]; /* f exact */
 	double q2 = q * q;
