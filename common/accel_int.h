@@ -220,7 +220,7 @@ struct accel {
 /* Whether single rays take the AVX2 node tests (WIDE NODES IN AVX2,
  * accel_box.h): the CPU and its OS support AVX2 and the environment's
  * PORTRAY_SIMD is not "sse2" (which keeps the SSE2 ones, to compare them:
- * the two give the same bytes). Read once. */
+ * the two give the same bytes). Asked by each accel_build. */
 bool accel_use_avx2(void);
 
 /*
