@@ -412,7 +412,8 @@ static __attribute__((noinline)) bool brute_hit(const struct accel *A, const str
 		for (; k < g->n_tri && g->tri[k].mesh == mi; k++) {
 			const uint32_t *ix = tri_ix(m, g->tri[k].tri);
 			double t, b1, b2;
-			if (geom_tri_hit(trace_wray(r), m->v[ix[0]], m->v[ix[1]], m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2) &&
+			if (!tri_flat_behind(g, k, r, &m->v[ix[0]]) && /* FLAT TRIANGLES: part of the test */
+			    geom_tri_hit(trace_wray(r), m->v[ix[0]], m->v[ix[1]], m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2) &&
 			    cand_better(best, REF_MAKE(REF_TRI, k), t)) {
 				cand_take(best, r, REF_MAKE(REF_TRI, k), t);
 				best->b1 = b1;

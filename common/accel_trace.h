@@ -215,26 +215,40 @@ static inline uint32_t group_ref(const struct group *g, uint32_t k)
 }
 
 /*
- * FLAT TRIANGLES. When a triangle's three vertices share the coordinate
- * of the ray's axis kz bit for bit (a floor z = -0.5 and a ray steeper
- * than 45 degrees to it), the watertight test's Az, Bz and Cz are one
- * double, and so are the three products s = sz Az in T = U s + V s + W s.
- * Past the edge test U, V and W have one sign (or are 0), so T is a sum
- * of terms of one sign, det = U + V + W has U's, and t = T / det has s's
- * (or is 0 or NaN): when sz and Az are not of one strict sign, t > tmin
- * fails for tmin >= 0 and the test says no hit, whatever the edges. That
- * is the plane behind the ray's origin, or through it: the triangle a
- * shadow or secondary ray leaves (balls_s4's and rings_s3's floor points:
- * most of their 4.8 M and 3.4 M exact triangle tests a frame).
+ * FLAT TRIANGLES. A triangle whose three vertices share their coordinate
+ * c on axis p bit for bit (g->tri_flat: floors, walls, the faces of
+ * boxes) lies in the plane x_p = c exactly. A ray o + t d, t > tmin >= 0,
+ * whose origin is on one side (o_p > c) and which does not move toward
+ * the plane (d_p >= 0), or which starts in it and leaves it (o_p = c,
+ * d_p != 0), never meets that plane at a t the test accepts: that is
+ * decided here by exact comparisons of the doubles o_p, d_p and c, with
+ * no rounding, and the watertight test is not run. It is the triangle a
+ * shadow or secondary ray leaves, and any other in its plane (balls_s4's
+ * and rings_s3's floors: most of their exact triangle tests), and the
+ * floor under every shadow ray from above it.
+ *
+ * Where the watertight test runs it would say no hit too, but for
+ * rounding: where the ray's dominant axis kz is p (a ray steeper than 45
+ * degrees to the plane) its Az, Bz and Cz are one double and its T a sum
+ * of terms of one sign, so it agrees bit for bit (docs/rendering.md,
+ * "Acne"); for a shallower ray its edge functions are rounded from
+ * coordinates far larger than the ray's distance from the plane, and a
+ * hit it reported here would be a point the ray does not reach (a speck
+ * of acne). Such rays skip the test since RENDER_PIXEL_REV 5
+ * (docs/performance.md, round 19).
  */
 static inline __attribute__((always_inline)) bool tri_flat_behind(const struct group *g, uint32_t i,
-								   const struct geom_wray *w, const vec3 *a,
-								   double tmin)
+								   const struct trace *r, const vec3 *a)
 {
-	if (g->tri_flat[i] != w->kz || !(tmin >= 0))
+	uint32_t p = g->tri_flat[i];
+	if (p > 2 || !(r->tmin >= 0))
 		return false;
-	double Az = geom_comp(a, w->kz) - w->oz;
-	return !((Az > 0 && w->sz > 0) || (Az < 0 && w->sz < 0));
+	double c = geom_comp(a, (int)p), op = geom_comp(&r->o, (int)p), dp = geom_comp(&r->d, (int)p);
+	if (op > c)
+		return dp >= 0;
+	if (op < c)
+		return dp <= 0;
+	return op == c && (dp > 0 || dp < 0);
 }
 
 /* ref_test of triangle reference ref. */
@@ -245,9 +259,9 @@ static inline __attribute__((always_inline)) bool tri_test(const struct group *g
 	const struct gmesh *m = &g->mesh[gt->mesh];
 	const uint32_t *ix = tri_ix(m, gt->tri);
 	double t, b1, b2;
-	const struct geom_wray *w = trace_wray(r);
-	if (tri_flat_behind(g, REF_IDX(ref), w, &m->v[ix[0]], r->tmin) ||
-	    !geom_tri_hit_p(w, &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2) ||
+	if (tri_flat_behind(g, REF_IDX(ref), r, &m->v[ix[0]]) ||
+	    !geom_tri_hit_p(trace_wray(r), &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &t, &b1,
+			    &b2) ||
 	    !cand_better(c, ref, t))
 		return false;
 	c->b1 = b1;
@@ -264,9 +278,9 @@ static inline __attribute__((always_inline)) bool tri_occludes(const struct grou
 	const struct gmesh *m = &g->mesh[gt->mesh];
 	const uint32_t *ix = tri_ix(m, gt->tri);
 	double t, b1, b2;
-	const struct geom_wray *w = trace_wray(r);
-	return !tri_flat_behind(g, REF_IDX(ref), w, &m->v[ix[0]], r->tmin) &&
-	       geom_tri_hit_p(w, &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &t, &b1, &b2);
+	return !tri_flat_behind(g, REF_IDX(ref), r, &m->v[ix[0]]) &&
+	       geom_tri_hit_p(trace_wray(r), &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &t, &b1,
+			      &b2);
 }
 
 /*
@@ -721,10 +735,9 @@ static inline __attribute__((always_inline)) bool cross_tri(const struct cross_q
 	const struct gtri *gt = &g->tri[REF_IDX(ref)];
 	const struct gmesh *m = &g->mesh[gt->mesh];
 	const uint32_t *ix = tri_ix(m, gt->tri);
-	const struct geom_wray *w = trace_wray(r);
 	struct cand c;
-	if (tri_flat_behind(g, REF_IDX(ref), w, &m->v[ix[0]], r->tmin) ||
-	    !geom_tri_hit_p(w, &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &c.t, &c.b1, &c.b2))
+	if (tri_flat_behind(g, REF_IDX(ref), r, &m->v[ix[0]]) ||
+	    !geom_tri_hit_p(trace_wray(r), &m->v[ix[0]], &m->v[ix[1]], &m->v[ix[2]], r->tmin, r->tmax, &c.t, &c.b1, &c.b2))
 		return true;
 	if (!lv && cross_opaque(Q->f, m->mat)) {
 		*Q->hint = ref;

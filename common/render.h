@@ -57,8 +57,13 @@ int renderer_set_size(struct renderer *r, uint32_t w, uint32_t h);
  *    stepped from hit to hit, each step offset and aimed anew.
  * 4: the Phong highlight's power is xm_pow_lite (LITE POW, docs/maths.md),
  *    within a few ulps of xm_pow's value instead of the same bits.
+ * 5: a ray that leaves the plane of a flat triangle, or never reaches it,
+ *    skips that triangle's test whatever its direction (FLAT TRIANGLES,
+ *    accel_trace.h), where only rays steeper than 45 degrees to the plane
+ *    did; a shallower one could get a rounding hit (acne) from a triangle
+ *    about 10^6 times larger than its distance.
  */
-#define RENDER_PIXEL_REV 4
+#define RENDER_PIXEL_REV 5
 
 /*
  * What a tile's pixels are: chosen per render from the output format (the

@@ -28,7 +28,7 @@ _Static_assert(PROTO_BUILD_PROTO == PROTO_VERSION && PROTO_BUILD_SCENE == PROTO_
 #define STR2(x) #x
 #define STR(x) STR2(x)
 /* the pixels' revision as a plain number (common/render.h) */
-#define PROTO_BUILD_PIXELS 4
+#define PROTO_BUILD_PIXELS 5
 _Static_assert(PROTO_BUILD_PIXELS == RENDER_PIXEL_REV, "build id numbers");
 
 /* What decides whether two builds may share a render: the protocol and

@@ -9,7 +9,8 @@
  * direction, with tmin 0, tiny or negative and tmax infinite or finite, at
  * scales from 1e-3 to 1e3 and centres up to 1e3 away: the same hit or
  * miss, and the same t bit for bit. And FLAT TRIANGLES (flat_triangles
- * below).
+ * below): the rule is right, and moves no hit of a ray that starts off
+ * the plane.
  */
 #include <math.h>
 #include <stdio.h>
@@ -51,10 +52,17 @@ static void limits(double *tmin, double *tmax)
  * whose vertices share the coordinate of one axis bit for bit, and rays
  * from points on it (inside and beyond its edges), on its plane, 1e-9 off
  * it either side (of the coordinates, as shading offsets them) or well
- * away, steep and grazing: wherever tri_flat_behind says "no hit",
- * geom_tri_hit_p says so too. Returns how often it said so.
+ * away, steep and grazing. Wherever tri_flat_behind says "no hit":
+ *   - the ray does not reach the plane: its origin's distance from it,
+ *     o_p - c, is 0 or of d_p's sign, or d_p is 0 (computed apart, in
+ *     long double, as a check of the rule's exact comparisons);
+ *   - geom_tri_hit_p says "no hit" too for every ray that starts off the
+ *     plane (*bad counts those it hits: none, so the rule moves no pixel
+ *     of a ray that shading starts), and its rounding hits of rays that
+ *     start in the plane (*on_plane) lie within 1e-9 of the origin.
+ * Returns how often it said so.
  */
-static long flat_triangles(long *bad, long *hits)
+static long flat_triangles(long *bad, long *hits, long *on_plane)
 {
 	uint8_t flat[1];
 	struct group g;
@@ -85,15 +93,24 @@ static long flat_triangles(long *bad, long *hits)
 			*dq = (*dq < 0 ? -1 : 1) * (1 + 2 * uniform());
 		}
 		d = v3_scale(d, uniform() < 0.5 ? 1 : 3 * scale * uniform() + 1e-3);
-		double tmin, tmax, t, b1, b2;
+		double tmin, tmax, t = 0, b1, b2;
 		limits(&tmin, &tmax);
-		struct geom_wray wr;
-		geom_wray_init(&wr, o, d);
-		bool behind = tri_flat_behind(&g, 0, &wr, &v[0], tmin);
-		bool hit = geom_tri_hit_p(&wr, &v[0], &v[1], &v[2], tmin, tmax, &t, &b1, &b2);
+		struct trace r;
+		trace_init(&r, o, d, tmin, tmax);
+		bool behind = tri_flat_behind(&g, 0, &r, &v[0]);
+		bool hit = geom_tri_hit_p(trace_wray(&r), &v[0], &v[1], &v[2], tmin, tmax, &t, &b1, &b2);
 		behind_n += behind;
-		*bad += behind && hit;
 		*hits += hit;
+		if (!behind)
+			continue;
+		long double h = (long double)geom_comp(&o, ax) - geom_comp(&v[0], ax), dp = geom_comp(&d, ax);
+		*bad += !(tmin >= 0) || h * dp < 0; /* the rule's claim, computed apart */
+		if (hit && h != 0)
+			(*bad)++;
+		if (hit && h == 0) {
+			(*on_plane)++;
+			*bad += !(t * sqrt(v3_dot(d, d)) <= 1e-9 * (1 + m));
+		}
 	}
 	return behind_n;
 }
@@ -138,8 +155,9 @@ int main(void)
 	/* the cases the early miss is for, and hits, are many */
 	CHECK(away_s > N_RAYS / 8 && hits_s > N_RAYS / 8);
 	CHECK(away_c > N_RAYS / 8 && hits_c > N_RAYS / 10);
-	long bad_f = 0, hits_f = 0, behind_f = flat_triangles(&bad_f, &hits_f);
-	printf("flat triangles: %ld hits, %ld behind, %ld behind yet hit\n", hits_f, behind_f, bad_f);
+	long bad_f = 0, hits_f = 0, on_f = 0, behind_f = flat_triangles(&bad_f, &hits_f, &on_f);
+	printf("flat triangles: %ld hits, %ld behind, %ld of them rounding hits from the plane, %ld wrong\n", hits_f,
+	       behind_f, on_f, bad_f);
 	CHECK(bad_f == 0);
 	CHECK(behind_f > N_RAYS / 8 && hits_f > N_RAYS / 20);
 	TEST_MAIN_END();
