@@ -696,7 +696,7 @@ bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ra
 	vec3 d = v3_sub(lb->lp, r->o);
 	double ux = -r->d.x, uy = -r->d.y, uz = -r->d.z;
 	double ax = fabs(ux), ay = fabs(uy), az = fabs(uz);
-	double depth = fmax(ax, fmax(ay, az));
+	double depth = geom_fmax(ax, geom_fmax(ay, az)); /* fmax, inline */
 	if (!(r->tmax <= 1) || d.x != r->d.x || d.y != r->d.y || d.z != r->d.z || !(depth <= lb->R))
 		return accel_occluded_hint(a, r, hint); /* not a ray the buffer answers for */
 	struct trace t;

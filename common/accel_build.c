@@ -121,8 +121,8 @@ static int prep_tree(struct accel *A, uint32_t obj)
 /* Pads a box by a relative epsilon so double rounding never culls a hit. */
 static struct geom_box pad_box(struct geom_box b)
 {
-	double m = fmax(fmax(fabs(b.lo.x), fabs(b.lo.y)), fmax(fabs(b.lo.z), fabs(b.hi.x)));
-	m = fmax(m, fmax(fabs(b.hi.y), fabs(b.hi.z)));
+	double m = geom_fmax(geom_fmax(fabs(b.lo.x), fabs(b.lo.y)), geom_fmax(fabs(b.lo.z), fabs(b.hi.x)));
+	m = geom_fmax(m, geom_fmax(fabs(b.hi.y), fabs(b.hi.z)));
 	double e = 1e-9 * m + 1e-300;
 	vec3 ev = v3(e, e, e);
 	b.lo = v3_sub(b.lo, ev);
@@ -234,8 +234,8 @@ static int refbuf_push(struct refbuf *b, uint32_t ref, struct geom_box box)
 			return -1;
 	}
 	if (b->fbox) {
-		double m = fmax(fmax(fmax(fabs(box.lo.x), fabs(box.lo.y)), fabs(box.lo.z)),
-				fmax(fmax(fabs(box.hi.x), fabs(box.hi.y)), fabs(box.hi.z)));
+		double m = geom_fmax(geom_fmax(geom_fmax(fabs(box.lo.x), fabs(box.lo.y)), fabs(box.lo.z)),
+				geom_fmax(geom_fmax(fabs(box.hi.x), fabs(box.hi.y)), fabs(box.hi.z)));
 		if (!(m <= FBOX_MAX) && refbuf_to_double(b) < 0)
 			return -1;
 	}
@@ -799,8 +799,8 @@ static struct group *build_group(struct accel *A, const uint32_t *objs, uint32_t
 		b.hi = v3_sub(b.hi, g->center);
 		if (boxes)
 			boxes[k] = b;
-		big = fmax(big, fmax(fmax(fabs(b.lo.x), fabs(b.lo.y)), fabs(b.lo.z)));
-		big = fmax(big, fmax(fmax(fabs(b.hi.x), fabs(b.hi.y)), fabs(b.hi.z)));
+		big = geom_fmax(big, geom_fmax(geom_fmax(fabs(b.lo.x), fabs(b.lo.y)), fabs(b.lo.z)));
+		big = geom_fmax(big, geom_fmax(geom_fmax(fabs(b.hi.x), fabs(b.hi.y)), fabs(b.hi.z)));
 	}
 	vec3 pad = v3(big * BOX_PAD_REL, big * BOX_PAD_REL, big * BOX_PAD_REL);
 	for (uint32_t k = 0; k < n_bounded; k++) {

@@ -101,8 +101,8 @@ static bool face_proj(vec3 lo, vec3 hi, int f, double D, double ext[4], double *
 	for (int k = 0; k < 2; k++)
 		for (int m = 0; m < 2; m++) {
 			double p = pb[k] / dd[m], q = pc[k] / dd[m];
-			pmin = fmin(pmin, p), pmax = fmax(pmax, p);
-			qmin = fmin(qmin, q), qmax = fmax(qmax, q);
+			pmin = geom_fmin(pmin, p), pmax = geom_fmax(pmax, p);
+			qmin = geom_fmin(qmin, q), qmax = geom_fmax(qmax, q);
 		}
 	pmin -= LBUF_PAD, qmin -= LBUF_PAD;
 	pmax += LBUF_PAD, qmax += LBUF_PAD;
@@ -120,7 +120,7 @@ static bool face_rect(const struct lbuf *lb, vec3 lo, vec3 hi, int f, double D, 
 	double ext[4], d0;
 	if (!face_proj(lo, hi, f, D, ext, &d0))
 		return false;
-	*frac = (fmin(ext[1], 1) - fmax(ext[0], -1)) * (fmin(ext[3], 1) - fmax(ext[2], -1)) * 0.25;
+	*frac = (geom_fmin(ext[1], 1) - geom_fmax(ext[0], -1)) * (geom_fmin(ext[3], 1) - geom_fmax(ext[2], -1)) * 0.25;
 	r->face = (uint16_t)f;
 	r->i0 = (uint16_t)lbuf_cell(lb, (uint32_t)f, 0, ext[0]), r->i1 = (uint16_t)lbuf_cell(lb, (uint32_t)f, 0, ext[1]);
 	r->j0 = (uint16_t)lbuf_cell(lb, (uint32_t)f, 1, ext[2]), r->j1 = (uint16_t)lbuf_cell(lb, (uint32_t)f, 1, ext[3]);
@@ -170,8 +170,8 @@ static void zoom_faces(struct lbuf *lb, const struct group *g, const struct geom
 			    !(ext[3] - ext[2] < LBUF_SMALL))
 				continue;
 			for (int k = 0; k < 2; k++) {
-				lo[f][k] = fmin(lo[f][k], ext[2 * k]);
-				hi[f][k] = fmax(hi[f][k], ext[2 * k + 1]);
+				lo[f][k] = geom_fmin(lo[f][k], ext[2 * k]);
+				hi[f][k] = geom_fmax(hi[f][k], ext[2 * k + 1]);
 			}
 			n_small[f]++;
 		}
@@ -180,7 +180,7 @@ static void zoom_faces(struct lbuf *lb, const struct group *g, const struct geom
 		/* the zoom that brings the window's small references down to
 		 * LBUF_DENSE a cell, 2 to LBUF_ZOOM, or none; an empty window
 		 * (NaN or infinite extents) fails the tests below */
-		double wa = fmin(hi[f][0], 1) - fmax(lo[f][0], -1), wb = fmin(hi[f][1], 1) - fmax(lo[f][1], -1);
+		double wa = geom_fmin(hi[f][0], 1) - geom_fmax(lo[f][0], -1), wb = geom_fmin(hi[f][1], 1) - geom_fmax(lo[f][1], -1);
 		double cells1 = wa * wb * 0.25 * lb->n * lb->n; /* the window's cells at zoom 1 */
 		double z = cells1 > 0 ? sqrt(n_small[f] / (cells1 * LBUF_DENSE)) : 1;
 		z = z > LBUF_ZOOM ? LBUF_ZOOM : z;
@@ -188,14 +188,14 @@ static void zoom_faces(struct lbuf *lb, const struct group *g, const struct geom
 		 * less than twice finer (not worth the entries) */
 		bool zoom = z >= 2;
 		for (int k = 0; k < 2; k++)
-			zoom &= fmin(hi[f][k], 1) - fmax(lo[f][k], -1) <= 1;
+			zoom &= geom_fmin(hi[f][k], 1) - geom_fmax(lo[f][k], -1) <= 1;
 		if (!zoom) /* nothing small, sparse, or spread over the face */
 			continue;
 		for (int k = 0; k < 2; k++) {
-			double a = fmax(lo[f][k], -1), b = fmin(hi[f][k], 1), w = 2 / z;
+			double a = geom_fmax(lo[f][k], -1), b = geom_fmin(hi[f][k], 1), w = 2 / z;
 			if (b - a < w) { /* centred, z finer, inside [-1, 1] */
 				double m = 0.5 * (a + b);
-				a = fmin(fmax(m - 0.5 * w, -1), 1 - w);
+				a = geom_fmin(geom_fmax(m - 0.5 * w, -1), 1 - w);
 				b = a + w;
 			}
 			lb->org[f][k] = a;
@@ -257,7 +257,7 @@ static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *box
 		const struct geom_box *bx = &boxes[perm[k]];
 		vec3 lo = v3_add(e, bx->lo), hi = v3_add(e, bx->hi);
 		for (int a = 0; a < 3; a++)
-			R = fmax(R, fmax(fabs(comp(lo, a)), fabs(comp(hi, a))));
+			R = geom_fmax(R, geom_fmax(fabs(comp(lo, a)), fabs(comp(hi, a))));
 	}
 	lb->R = R;
 	double D = LBUF_NEAR * R;
@@ -279,7 +279,7 @@ static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *box
 		double dist = 0; /* |X - lp|_inf over the box */
 		for (int a = 0; a < 3; a++) {
 			double l = comp(lo, a), h = comp(hi, a);
-			dist = fmax(dist, l > 0 ? l : h < 0 ? -h : 0);
+			dist = geom_fmax(dist, l > 0 ? l : h < 0 ? -h : 0);
 		}
 		if (dist <= 3 * D) { /* NEAR: every query tests it */
 			lb->near[lb->n_near++] = g->refs[k];
