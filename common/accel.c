@@ -684,6 +684,21 @@ bool accel_occluded_hint(const struct accel *a, const struct ray *r, uint32_t *h
 	return false;
 }
 
+/* ref_occludes for the light buffer's loops, with the sphere's and the
+ * triangle's tests inline: a call there made its caller (the shading, into
+ * which the query is inlined) save and restore its registers around every
+ * test. */
+static inline __attribute__((always_inline)) bool lbuf_ref_occludes(const struct accel *a, const struct group *g,
+								     uint32_t ref, struct trace *t)
+{
+	double tt;
+	switch (REF_KIND(ref)) {
+	case REF_SPHERE: return sphere_test(&g->sph[REF_IDX(ref)], t, &tt);
+	case REF_TRI: return tri_occludes(g, ref, t);
+	default: return ref_occludes(a, g, ref, t);
+	}
+}
+
 /* The LIGHT BUFFER query (accel_int.h, accel_light.c): after the hint and
  * the unbounded references, the entries of the cell of u = o - lp = -d up
  * to the ray's depth |u_a|; the tree when the ray is not one toward the
@@ -717,7 +732,7 @@ bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ra
 	for (uint32_t k = 0; k < lb->n_near; k++) {
 		if (cancel_poll_every(k)) /* CANCELLATION, as a leaf's references */
 			return false;
-		if (ref_occludes(a, g, lb->near[k], &t)) {
+		if (lbuf_ref_occludes(a, g, lb->near[k], &t)) {
 			*hint = lb->near[k];
 			return true;
 		}
@@ -727,7 +742,7 @@ bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ra
 	for (uint32_t k = 0; e < end && e->dmin <= lim; e++, k++) {
 		if (cancel_poll_every(k)) /* CANCELLATION, as a leaf's references */
 			return false;
-		if (ref_occludes(a, g, e->ref, &t)) {
+		if (lbuf_ref_occludes(a, g, e->ref, &t)) {
 			*hint = e->ref;
 			return true;
 		}
