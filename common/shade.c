@@ -501,14 +501,21 @@ static double frac(double x) { return x - floor(x); }
  * (a call passes the three vectors through the stack). test_shade_offset
  * compares the two.
  */
-static inline vec3 offset(vec3 p, vec3 ng, vec3 dir)
+static inline double offset_eps(vec3 p)
 {
 	double ax = fabs(p.x), ay = fabs(p.y), az = fabs(p.z);
 	double m = ay > az || az != az ? ay : az; /* fmax, NaN as the library's */
 	m = ax > m || m != m ? ax : m;
-	double e = 1e-9 * (1 + m);
+	return 1e-9 * (1 + m);
+}
+
+/* offset with p's offset_eps(p) e made already (a point's shadow rays). */
+static inline vec3 offset_by(vec3 p, vec3 ng, vec3 dir, double e)
+{
 	return v3_add(p, v3_scale(ng, v3_dot(dir, ng) < 0 ? -e : e));
 }
+
+static inline vec3 offset(vec3 p, vec3 ng, vec3 dir) { return offset_by(p, ng, dir, offset_eps(p)); }
 
 /*
  * Sample k of n on a light: a point light's position, or a point on the
@@ -777,6 +784,7 @@ static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx 
 		light_ways2((vec3[2]){ p, p }, (vec3[2]){ n, n },
 			    (vec3[2]){ c->lights[i].l->position, c->lights[j].l->position }, &way[i]);
 	}
+	const double eps = offset_eps(p); /* the shadow rays' offset, one for all */
 	for (uint32_t i = 0; i < c->n_lights; i++) {
 		if (cancel_poll()) /* CANCELLATION: a light's samples take milliseconds at most */
 			return col;
@@ -793,19 +801,25 @@ static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx 
 		vec3 sum = v3(0, 0, 0);
 		for (int k = 0; k < n_samples; k++) {
 			vec3 lp = point ? l->position : light_point(L, k, n_samples, r1, r2);
-			struct light_way w = point && pre && i < SHADE_PRE_WAYS && (pre->wknown >> i & 1)
-						     ? pre->way[i] /* LIGHT WAYS: made for the shadow packet */
-					     : point && i < n_ways ? way[i]
-								   : light_way_at(p, n, lp);
-			if (!w.lit)
+			struct light_way here; /* the way, where none was made before the loop */
+			const struct light_way *w;
+			if (point && pre && i < SHADE_PRE_WAYS && (pre->wknown >> i & 1))
+				w = &pre->way[i]; /* LIGHT WAYS: made for the shadow packet */
+			else if (point && i < n_ways)
+				w = &way[i];
+			else {
+				here = light_way_at(p, n, lp);
+				w = &here;
+			}
+			if (!w->lit)
 				continue;
 			/* SHADOW PACKETS: a known answer; a blocked ray adds nothing,
 			 * so its term (and highlight) are never made */
 			bool known = shadows && !l->no_shadows && pre && i < SHADE_PRE_LIGHTS && (pre->known >> i & 1);
 			if (known && (pre->occ >> i & 1))
 				continue;
-			vec3 ldir = w.ldir;
-			double dist = w.dist, ndotl = w.ndotl;
+			vec3 ldir = w->ldir;
+			double dist = w->dist, ndotl = w->ndotl;
 			vec3 in = l->colour;
 			if (l->fall_off != 0)
 				in = v3_scale(in, 1 / xm_pow(dist, l->fall_off));
@@ -828,7 +842,7 @@ static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx 
 			if (!later && maxabs(term) * weight < cut * n_samples)
 				continue;
 			if (traced) {
-				vec3 t = transmittance(c, offset(p, ng, ldir), lp, i, pre, obj);
+				vec3 t = transmittance(c, offset_by(p, ng, ldir, eps), lp, i, pre, obj);
 				if (maxc(t) <= 0)
 					continue;
 				if (later) {
