@@ -693,7 +693,7 @@ static inline __attribute__((always_inline)) bool lbuf_ref_occludes(const struct
 {
 	double tt;
 	switch (REF_KIND(ref)) {
-	case REF_SPHERE: return sphere_test(&g->sph[REF_IDX(ref)], t, &tt);
+	case REF_SPHERE: return sphere_test_with(&g->sph[REF_IDX(ref)], t, &tt, true); /* sphere_test, inline */
 	case REF_TRI: return tri_occludes(g, ref, t);
 	default: return ref_occludes(a, g, ref, t);
 	}
