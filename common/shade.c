@@ -211,8 +211,9 @@ static inline struct light_way light_way_at(vec3 p, vec3 n, vec3 lp)
  * and sums of the dot products left to right, the square root, 1 / dist,
  * the products), each correctly rounded as the scalar one, so the same
  * bits. A way is a chain of a square root, a division and two dot
- * products (about 50 cycles), and a shading point makes one per light:
- * two chains in one pass of the units instead of one after the other.
+ * products, on which the eye hits' shading waited (perf annotate), and a
+ * shading point makes one per light: two chains in one pass of the units
+ * instead of one after the other.
  */
 static inline void light_ways2(const vec3 p[2], const vec3 n[2], const vec3 lp[2], struct light_way w[2])
 {
@@ -498,8 +499,8 @@ static double frac(double x) { return x - floor(x); }
  * p moved off the surface with geometric normal ng to the side dir points
  * to, so a secondary ray from there (tmin = 0) cannot hit the surface it
  * starts on (no acne): accel_offset_point (accel.h), bit for bit, inline
- * (a call passes the three vectors through the stack). test_shade_offset
- * compares the two.
+ * (a call passes the three vectors through the stack). test_shade_inner
+ * compares the two. direct() makes offset_eps once for all its shadow rays.
  */
 static inline double offset_eps(vec3 p)
 {
@@ -509,7 +510,7 @@ static inline double offset_eps(vec3 p)
 	return 1e-9 * (1 + m);
 }
 
-/* offset with p's offset_eps(p) e made already (a point's shadow rays). */
+/* offset with e = offset_eps(p) made already. */
 static inline vec3 offset_by(vec3 p, vec3 ng, vec3 dir, double e)
 {
 	return v3_add(p, v3_scale(ng, v3_dot(dir, ng) < 0 ? -e : e));
