@@ -3,6 +3,9 @@
  * geometry (common/shade.c is included, so its static functions are
  * reachable; the accel is the real one, from the library):
  * - offset() is accel_offset_point, bit for bit (shade.c inlines it);
+ * - TWO WAYS AT ONCE: light_ways2's lanes are light_way_at's ways bit for
+ *   bit (distance, direction, n.l, lit), light behind, on or beside the
+ *   point, at any scale, with special values;
  * - TRANSPARENT BOXES: a shadow segment that may_cross_transparent says
  *   meets no possibly transparent surface is hit by none (accel_occluded
  *   on a scene of transparent triangles only), for random segments and
@@ -50,6 +53,50 @@ static void test_offset(void)
 		same += memcmp(&a, &b, sizeof a) == 0;
 	}
 	CHECK(same == total);
+}
+
+/* The fields light_way_at sets (the others are unset when dist is not > 0). */
+static bool same_way(const struct light_way *a, const struct light_way *b)
+{
+	if (memcmp(&a->dist, &b->dist, sizeof a->dist) != 0 || a->lit != b->lit)
+		return false;
+	if (!(a->dist > 0))
+		return true;
+	return memcmp(&a->ldir, &b->ldir, sizeof a->ldir) == 0 && memcmp(&a->ndotl, &b->ndotl, sizeof a->ndotl) == 0;
+}
+
+/* light_ways2 against light_way_at, lane by lane. */
+static void test_ways2(void)
+{
+	const double special[] = { 0.0, -0.0, 1e-310, 1e300, -1e300, INFINITY, NAN, 1.0 };
+	int n_special = (int)(sizeof special / sizeof special[0]);
+	int same = 0, total = 0, lit = 0;
+	for (int i = 0; i < 40000; i++) {
+		vec3 p[2], n[2], lp[2];
+		for (int k = 0; k < 2; k++) {
+			p[k] = rnd_v(-10, 10);
+			n[k] = v3_norm(rnd_v(-1, 1));
+			lp[k] = rnd_v(-20, 20);
+		}
+		if (i % 5 == 1)
+			lp[1] = p[1]; /* the light at the point: dist 0 */
+		if (i % 5 == 2) {
+			double s = pow(10, rnd_in(-150, 150));
+			p[0] = v3_scale(p[0], s), lp[0] = v3_scale(lp[0], s);
+		}
+		if (i % 5 == 3) /* special components */
+			lp[i & 1].y = special[i / 5 % n_special];
+		struct light_way w[2];
+		light_ways2(p, n, lp, w);
+		for (int k = 0; k < 2; k++) {
+			struct light_way ref = light_way_at(p[k], n[k], lp[k]);
+			total++;
+			same += same_way(&w[k], &ref);
+			lit += ref.lit;
+		}
+	}
+	CHECK(same == total);
+	CHECK(lit > total / 4 && lit < total - total / 4); /* both answers, often */
 }
 
 /* Adds triangle abc as a root (transformed by xf when given), material mat. */
@@ -186,6 +233,7 @@ static void test_tboxes_off(void)
 int main(void)
 {
 	test_offset();
+	test_ways2();
 	test_tboxes();
 	test_tboxes_off();
 	TEST_MAIN_END();
