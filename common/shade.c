@@ -507,7 +507,8 @@ static double frac(double x) { return x - floor(x); }
  * to, so a secondary ray from there (tmin = 0) cannot hit the surface it
  * starts on (no acne): accel_offset_point (accel.h), bit for bit, inline
  * (a call passes the three vectors through the stack). test_shade_inner
- * compares the two. direct() makes offset_eps once for all its shadow rays.
+ * compares the two. direct() makes offset_eps once for all its shadow
+ * rays, the shadow packets once a hit (block_eps).
  */
 static inline double offset_eps(vec3 p)
 {
@@ -1150,7 +1151,7 @@ static inline void closest_hits(const struct shade_ctx *c, struct ray r[4], int 
  * returns m. The ways to the light are pre[k]'s when known, and are made
  * here (and kept in pre for direct()) when i < SHADE_PRE_WAYS. */
 static inline int block_rays(const struct surf sf[4], const bool ok[4], int n, uint32_t i, vec3 lp,
-			     struct shadow_pre pre[4], struct ray r[4], int who[4])
+			     const double eps[4], struct shadow_pre pre[4], struct ray r[4], int who[4])
 {
 	int m = 0;
 	int any = -1; /* a hit to stand in for the others in light_ways2's lanes */
@@ -1174,11 +1175,19 @@ static inline int block_rays(const struct surf sf[4], const bool ok[4], int n, u
 		}
 		if (!w.lit)
 			continue;
-		vec3 o = offset(p, sf[k].ng, w.ldir);
+		vec3 o = offset_by(p, sf[k].ng, w.ldir, eps[k]);
 		r[m] = (struct ray){ o, v3_sub(lp, o), 0, 1 }; /* transmittance()'s */
 		who[m++] = k;
 	}
 	return m;
+}
+
+/* offset_eps of each prepared hit (ok[k]), once for all of block_rays'
+ * lights (eps[k] of any other is 0, unread). */
+static inline void block_eps(const struct surf sf[4], const bool ok[4], int n, double eps[4])
+{
+	for (int k = 0; k < 4; k++)
+		eps[k] = k < n && ok[k] ? offset_eps(sf[k].p) : 0;
 }
 
 /* The start of both shadow packet paths: pre[]'s bits cleared (its first,
@@ -1221,13 +1230,15 @@ static void shadow_packets(const struct shade_ctx *c, const struct surf sf[4], c
 	for (int k = 0; k < 4; k++)
 		pre[k].tval = NULL;
 	uint32_t n_lights = packet_lights(c, pre);
+	double eps[4];
+	block_eps(sf, ok, n, eps);
 	for (uint32_t i = 0; i < n_lights; i++) {
 		if (!packet_light(c, i))
 			continue;
 		const struct scene_light *l = c->lights[i].l;
 		struct ray r[4];
 		int who[4];
-		int m = block_rays(sf, ok, n, i, l->position, pre, r, who);
+		int m = block_rays(sf, ok, n, i, l->position, eps, pre, r, who);
 		if (!m)
 			continue;
 		occlusion_packet(c, i, r, who, m, pre);
@@ -1264,13 +1275,15 @@ static void shadow_packets_transparent(const struct shade_ctx *c, const struct s
 				       int depth, struct shadow_pre pre[4])
 {
 	uint32_t n_lights = packet_lights(c, pre);
+	double eps[4];
+	block_eps(sf, ok, n, eps);
 	for (uint32_t i = 0; i < n_lights; i++) {
 		if (!packet_light(c, i))
 			continue;
 		const struct scene_light *l = c->lights[i].l;
 		struct ray r[4];
 		int who[4];
-		int m = block_rays(sf, ok, n, i, l->position, pre, r, who);
+		int m = block_rays(sf, ok, n, i, l->position, eps, pre, r, who);
 		bool cross[4];
 		int nc = 0;
 		for (int j = 0; j < m; j++)
