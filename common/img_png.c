@@ -390,6 +390,9 @@ struct deflate {
 	uint16_t *sym_ll; /* literal (0-255) or length (3-258) */
 	uint16_t *sym_d;  /* 0 for a literal, else the distance */
 	int nsym;
+	/* the pending symbols' frequencies, counted as they are added (where
+	 * the kind is known without a branch): literal/length, distance */
+	uint32_t lf[286], df[30];
 	size_t block_start; /* first input byte of the pending block */
 	struct obuf *o;
 };
@@ -654,15 +657,7 @@ static void write_symbols(struct deflate *z, const uint16_t *lc, const uint8_t *
 static void flush_block(struct deflate *z, size_t end, int last)
 {
 	struct obuf *o = z->o;
-	uint32_t lf[286] = { 0 }, df[30] = { 0 };
-	for (int i = 0; i < z->nsym; i++) {
-		if (!z->sym_d[i]) {
-			lf[z->sym_ll[i]]++;
-		} else {
-			lf[257 + len_code[z->sym_ll[i]]]++;
-			df[img_dist_code(z->sym_d[i])]++;
-		}
-	}
+	uint32_t *lf = z->lf, *df = z->df;
 	lf[256] = 1;
 
 	/* dynamic code */
@@ -765,14 +760,28 @@ static void flush_block(struct deflate *z, size_t end, int last)
 		write_symbols(z, lc, ll, dc, dl);
 	}
 	z->nsym = 0;
+	memset(z->lf, 0, sizeof z->lf);
+	memset(z->df, 0, sizeof z->df);
 	z->block_start = end;
 }
 
-static inline void add_sym(struct deflate *z, unsigned ll, unsigned d)
+/* Adds literal byte c to the pending symbols. */
+static inline void add_lit(struct deflate *z, unsigned c)
 {
-	z->sym_ll[z->nsym] = (uint16_t)ll;
+	z->sym_ll[z->nsym] = (uint16_t)c;
+	z->sym_d[z->nsym] = 0;
+	z->nsym++;
+	z->lf[c]++;
+}
+
+/* Adds a match of len (3..258) at distance d (1..32768). */
+static inline void add_match(struct deflate *z, unsigned len, unsigned d)
+{
+	z->sym_ll[z->nsym] = (uint16_t)len;
 	z->sym_d[z->nsym] = (uint16_t)d;
 	z->nsym++;
+	z->lf[257 + len_code[len]]++;
+	z->df[img_dist_code(d)]++;
 }
 
 /* deflate_raw stays a function of its own: inlined into its caller along
@@ -842,14 +851,14 @@ IMG_NOINLINE static int deflate_raw(const uint8_t *in, size_t n, struct obuf *o,
 			len = longest_match(&z, pos, has_prev ? prev_len : 0, &dist);
 		if (has_prev && prev_len >= MIN_MATCH && len <= prev_len) {
 			/* the match at pos-1 wins: emit it, insert what it covers */
-			add_sym(&z, (unsigned)prev_len, prev_dist);
+			add_match(&z, (unsigned)prev_len, prev_dist);
 			size_t stop = pos - 1 + (size_t)prev_len;
 			insert_run(&z, pos, stop);
 			pos = stop;
 			has_prev = 0;
 		} else {
 			if (has_prev)
-				add_sym(&z, in[pos - 1], 0);
+				add_lit(&z, in[pos - 1]);
 			insert(&z, pos);
 			has_prev = 1;
 			prev_len = len;
@@ -860,7 +869,7 @@ IMG_NOINLINE static int deflate_raw(const uint8_t *in, size_t n, struct obuf *o,
 			flush_block(&z, has_prev ? pos - 1 : pos, 0); /* pending byte: next block */
 	}
 	if (has_prev)
-		add_sym(&z, in[n - 1], 0); /* no match can start at n-1 */
+		add_lit(&z, in[n - 1]); /* no match can start at n-1 */
 	flush_block(&z, n, last);
 	return o->oom ? -1 : 0;
 }
