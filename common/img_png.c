@@ -426,13 +426,18 @@ static inline uint32_t hash_at(const struct deflate *z, size_t pos)
 	return hash3(z->in + pos);
 }
 
+/* insert() of pos whose hash_at is h (pos + MIN_MATCH <= z->n). */
+static inline void insert_h(struct deflate *z, size_t pos, uint32_t h)
+{
+	z->prev[pos & (WSIZE - 1)] = z->head[h];
+	z->head[h] = (uint32_t)pos + 1;
+}
+
 static inline void insert(struct deflate *z, size_t pos)
 {
 	if (pos + MIN_MATCH > z->n)
 		return;
-	uint32_t h = hash_at(z, pos);
-	z->prev[pos & (WSIZE - 1)] = z->head[h];
-	z->head[h] = (uint32_t)pos + 1;
+	insert_h(z, pos, hash_at(z, pos));
 }
 
 
@@ -521,13 +526,13 @@ static inline uint16_t load16(const uint8_t *p)
 #endif
 
 /*
- * Longest match for pos among earlier positions (inserted already); 0 if
- * < 3. A candidate is compared in full only when the two bytes ending at
+ * Longest match for pos (h: hash_at(z, pos)) among earlier positions
+ * (inserted already); 0 if < 3. A candidate is compared in full only when the two bytes ending at
  * the current best length and its first two bytes agree (each necessary
  * for a longer match), then 8 bytes at a time: the same candidates win as
  * with a byte-at-a-time comparison.
  */
-static int longest_match(const struct deflate *z, size_t pos, int prev_len, unsigned *dist)
+static int longest_match(const struct deflate *z, size_t pos, uint32_t h, int prev_len, unsigned *dist)
 {
 	size_t avail = z->n - pos;
 	int maxlen = avail < MAX_MATCH ? (int)avail : MAX_MATCH;
@@ -545,7 +550,7 @@ static int longest_match(const struct deflate *z, size_t pos, int prev_len, unsi
 	 * link can have been overwritten (position c's slot is reused by
 	 * c + WSIZE, not inserted yet), so links only lead back. */
 	uint32_t lim = pos > WSIZE ? (uint32_t)(pos - WSIZE) : 0;
-	uint32_t cand = z->head[hash_at(z, pos)];
+	uint32_t cand = z->head[h];
 	while (cand > lim && chain-- > 0) {
 		size_t c = cand - 1;
 		const uint8_t *t = z->in + c;
@@ -844,22 +849,31 @@ IMG_NOINLINE static int deflate_raw(const uint8_t *in, size_t n, struct obuf *o,
 	size_t pos = 0;
 	int has_prev = 0, prev_len = 0;
 	unsigned prev_dist = 0;
+	/* h: hash_at(pos), made once for its search and its insertion, and
+	 * (as hn) one position ahead, so that the chain's head is fetched
+	 * under the search before it; 0 where fewer than 3 bytes are left */
+	uint32_t h = n >= MIN_MATCH ? hash_at(&z, 0) : 0;
 	while (pos < n) {
 		unsigned dist = 0;
 		int len = 0;
+		uint32_t hn = pos + 1 + MIN_MATCH <= n ? hash_at(&z, pos + 1) : 0;
+		__builtin_prefetch(&z.head[hn]);
 		if (!has_prev || prev_len < LAZY_LEN)
-			len = longest_match(&z, pos, has_prev ? prev_len : 0, &dist);
+			len = longest_match(&z, pos, h, has_prev ? prev_len : 0, &dist);
 		if (has_prev && prev_len >= MIN_MATCH && len <= prev_len) {
 			/* the match at pos-1 wins: emit it, insert what it covers */
 			add_match(&z, (unsigned)prev_len, prev_dist);
 			size_t stop = pos - 1 + (size_t)prev_len;
 			insert_run(&z, pos, stop);
 			pos = stop;
+			h = pos + MIN_MATCH <= n ? hash_at(&z, pos) : 0;
 			has_prev = 0;
 		} else {
 			if (has_prev)
 				add_lit(&z, in[pos - 1]);
-			insert(&z, pos);
+			if (pos + MIN_MATCH <= n)
+				insert_h(&z, pos, h);
+			h = hn;
 			has_prev = 1;
 			prev_len = len;
 			prev_dist = dist;
