@@ -6,6 +6,10 @@
  * - TWO WAYS AT ONCE: light_ways2's lanes are light_way_at's ways bit for
  *   bit (distance, direction, n.l, lit), light behind, on or beside the
  *   point, at any scale, with special values;
+ * - POINT LIGHTS ONLY: the flag is set exactly when every light is a point
+ *   light without fall-off or no-shadows and shadows are on, and then
+ *   direct_body's folded copy gives the general copy's colours bit for
+ *   bit, with the eye hits' shadow packets and without;
  * - TRANSPARENT BOXES: a shadow segment that may_cross_transparent says
  *   meets no possibly transparent surface is hit by none (accel_occluded
  *   on a scene of transparent triangles only), for random segments and
@@ -201,6 +205,129 @@ done:
 	scene_free(s);
 }
 
+/* A cluster of spheres over a floor of two triangles, three lights;
+ * variant 0: all point lights; 1: one with fall-off; 2: one a sphere
+ * light; 3: one with no-shadows; 4: the image without shadows. */
+static struct scene *points_scene(int variant)
+{
+	struct scene *s = scene_new();
+	struct scene_error err;
+	struct scene_material m;
+	uint32_t mirror, plain;
+	scene_material_defaults(&m);
+	m.specular = 0.5;
+	m.spec_power = 3.0827; /* balls_s4's: every highlight needs its power */
+	m.reflection = 0.5;
+	m.diff_colour = v3(0.9, 0.6, 0.3);
+	CHECK(scene_add_material(s, &m, &mirror, &err) == 0);
+	scene_material_defaults(&m);
+	m.specular = 0.3;
+	m.spec_power = 60; /* POW SKIP's tests */
+	m.diffuse = 0.8;
+	CHECK(scene_add_material(s, &m, &plain, &err) == 0);
+	for (int i = 0; i < 60; i++) {
+		struct scene_object o;
+		uint32_t id;
+		scene_object_defaults(&o, PRIM_SPHERE);
+		o.u.sphere.centre = rnd_v(-2, 2);
+		o.u.sphere.radius = rnd_in(0.1, 0.5);
+		o.material = i % 3 ? mirror : plain;
+		CHECK(scene_add_object(s, &o, &id, &err) == 0);
+		CHECK(scene_add_root(s, id, &err) == 0);
+	}
+	add_tri(s, v3(-9, -3, -9), v3(9, -3, -9), v3(9, -3, 9), plain, NULL);
+	add_tri(s, v3(-9, -3, -9), v3(9, -3, 9), v3(-9, -3, 9), plain, NULL);
+	const vec3 at[3] = { v3(4, 3, 2), v3(1, -2.5, 4), v3(-3, 1, 5) };
+	for (int i = 0; i < 3; i++) {
+		struct scene_light l;
+		scene_light_defaults(&l);
+		l.position = at[i];
+		l.colour = v3(0.58, 0.58, 0.58);
+		if (i == 1 && variant == 1)
+			l.fall_off = 1;
+		if (i == 2 && variant == 2) {
+			l.shape = LIGHT_SPHERE;
+			l.sphere.centre = at[i];
+			l.sphere.radius = 0.2;
+			l.samples = 4;
+		}
+		if (i == 0 && variant == 3)
+			l.no_shadows = true;
+		CHECK(scene_add_light(s, &l, &err) == 0);
+	}
+	s->image.no_shadows = variant == 4;
+	return s;
+}
+
+/* direct_body's two copies on hit sf of ray r (weight w, shadow answers
+ * pre or none): 1 when their colours differ in a bit. */
+static int copies_differ(const struct shade_ctx *c, const struct ray *r, const struct surf *sf, double w,
+			 uint64_t seed, const struct shadow_pre *pre, uint32_t obj)
+{
+	const struct shader_mat *m = sf->m;
+	double kd = m->diffuse * (1 - sf->td);
+	vec3 a = direct_body(c, sf->p, sf->n, sf->ng, v3_neg(r->d), m, kd, w, seed, pre, obj, true);
+	vec3 b = direct_body(c, sf->p, sf->n, sf->ng, v3_neg(r->d), m, kd, w, seed, pre, obj, false);
+	return memcmp(&a, &b, sizeof a) != 0;
+}
+
+static void test_points_only(void)
+{
+	for (int variant = 0; variant < 5; variant++) {
+		struct scene *s = points_scene(variant);
+		struct scene_error err;
+		struct accel *a = NULL;
+		struct shade_ctx *c = NULL;
+		CHECK(accel_build(s, &a, &err) == 0);
+		CHECK(shade_ctx_new(s, a, &c, &err) == 0);
+		if (!a || !c)
+			goto next;
+		CHECK(c->points_only == (variant == 0));
+		if (variant != 0)
+			goto next;
+		int compared = 0, lit = 0, differ = 0;
+		const double weights[4] = { 1.0, 0.5, 1.0 / 40, 1.0 / 900 };
+		for (int i = 0; i < 4000; i++) {
+			/* four rays from one eye toward neighbouring points, as a 2x2 block */
+			vec3 eye = rnd_v(-7, 7), aim = rnd_v(-2, 2);
+			struct ray u[4];
+			struct surf sf[4];
+			bool ok[4];
+			for (int k = 0; k < 4; k++) {
+				vec3 d = v3_norm(v3_sub(v3_add(aim, rnd_v(-0.05, 0.05)), eye));
+				u[k] = (struct ray){ eye, d, 0, INFINITY };
+				struct hit h;
+				ok[k] = accel_intersect(a, &u[k], &h) && surf_prepare(c, &u[k], &h, &sf[k]);
+			}
+			struct shadow_pre pre[4];
+			shadow_packets(c, sf, ok, 4, pre);
+			for (int k = 0; k < 4; k++) {
+				if (!ok[k])
+					continue;
+				double w = weights[(i + k) % 4];
+				uint64_t seed = (uint64_t)i * 4 + (uint64_t)k;
+				/* as an eye hit (the packets' answers) and as a mirror hit (none) */
+				differ += copies_differ(c, &u[k], &sf[k], w, seed, &pre[k], SHADE_HINT_ANY);
+				differ += copies_differ(c, &u[k], &sf[k], w, seed, NULL, sf[k].obj);
+				vec3 col = direct_body(c, sf[k].p, sf[k].n, sf[k].ng, v3_neg(u[k].d), sf[k].m,
+						       sf[k].m->diffuse, 1.0, seed, NULL, sf[k].obj, true);
+				lit += maxc(col) > 0;
+				compared += 2;
+			}
+		}
+		CHECK(compared > 10000);
+		CHECK(lit > 1000); /* lights reached, with highlights to power */
+		CHECK(differ == 0);
+		if (differ)
+			fprintf(stderr, "POINT LIGHTS ONLY: %d of %d colours differ between the copies\n", differ,
+				compared);
+	next:
+		shade_ctx_free(c);
+		accel_free(a);
+		scene_free(s);
+	}
+}
+
 /* The shortcut is off when a possibly transparent surface gets no box. */
 static void test_tboxes_off(void)
 {
@@ -234,6 +361,7 @@ int main(void)
 {
 	test_offset();
 	test_ways2();
+	test_points_only();
 	test_tboxes();
 	test_tboxes_off();
 	TEST_MAIN_END();
