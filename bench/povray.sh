@@ -32,7 +32,9 @@
 # rays were not traced, and its figure is marked "+").
 #
 # Times are of the whole process (start-up, parsing, building, tracing and
-# writing the PNG), measured by /usr/bin/time: CPU time (user + system,
+# writing the PNG), measured by build/tools/cputime (to the microsecond;
+# /usr/bin/time, to the hundredth of a second, where that is not built:
+# 8-20% of a tetra_s4 or teapot render): CPU time (user + system,
 # every thread the process ran; the figure that holds on a shared machine,
 # and POV-Ray's start-up waits about 0.6 s without using the CPU) and
 # wall-clock time. POV-Ray and portray run alternately, POV_REPS times each
@@ -42,7 +44,7 @@
 #
 # POV_SCENES="balls_s4 teapot" limits the scenes, POV_MODES=plain (deep,
 # ss3) the modes (default "plain deep ss3"). Skips (exit 0) when povray,
-# /usr/bin/time or the shared data is missing. Nothing here is a test.
+# both timers or the shared data is missing. Nothing here is a test.
 SHARED=${PORTRAY_SHARED:-../shared/data}
 MASTER=${MASTER:-bin/portray-master}
 W=${POV_W:-1280}
@@ -54,9 +56,15 @@ if ! command -v povray >/dev/null 2>&1; then
 	echo "povray not installed: skipped"
 	exit 0
 fi
-TIME=/usr/bin/time
-if [ ! -x "$TIME" ]; then
-	echo "no /usr/bin/time: skipped"
+# timed COMMAND...: COMMAND, then "TIME user sys wall" (seconds) on stderr
+CPUTIME=${CPUTIME:-build/tools/cputime}
+if [ -x "$CPUTIME" ]; then
+	CPUTIME=$(cd "$(dirname "$CPUTIME")" && pwd)/$(basename "$CPUTIME")
+	timed() { "$CPUTIME" "$@"; }
+elif [ -x /usr/bin/time ]; then
+	timed() { /usr/bin/time -f "TIME %U %S %e" "$@"; }
+else
+	echo "neither $CPUTIME nor /usr/bin/time: skipped"
 	exit 0
 fi
 if [ ! -d "$SHARED/spd/pov" ] && [ ! -d "$SHARED/meshes" ]; then
@@ -183,7 +191,7 @@ run_pov() {
 		} >"$pov"
 	fi
 	# shellcheck disable=SC2086 # $aa is several options
-	(cd "$TMP" && "$TIME" -f "TIME %U %S %e" povray "+I$pov" "+O$TMP/pov.png" +FN "+W$W" "+H$H" -D $aa \
+	(cd "$TMP" && timed povray "+I$pov" "+O$TMP/pov.png" +FN "+W$W" "+H$H" -D $aa \
 		"+WT$2" >"$TMP/pov.log" 2>&1)
 	tr '\r' '\n' <"$TMP/pov.log" | awk '
 	/^TIME/ { cpu = $2 + $3; wall = $4 }
@@ -195,7 +203,7 @@ run_pov() {
 
 # run_ours SCENE THREADS: the same for portray
 run_ours() {
-	"$TIME" -f "TIME %U %S %e" "$MASTER" "$1" -o "$TMP/ours.png" -j "$2" --size "${W}x${H}" >"$TMP/ours.log" 2>&1
+	timed "$MASTER" "$1" -o "$TMP/ours.png" -j "$2" --size "${W}x${H}" >"$TMP/ours.log" 2>&1
 	awk '
 	/^TIME/ { cpu = $2 + $3; wall = $4 }
 	/eye rays/ { for (i = 1; i < NF; i++) { if ($(i + 1) == "eye") rays = $i; if ($(i + 1) == "secondary") sec = $i } }
