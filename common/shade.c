@@ -57,8 +57,8 @@ struct shade_ctx {
 	double cut;           /* SHADE_MIN_WEIGHT / total_samples (direct()) */
 	bool any_transparent; /* some material has transparency > 0 */
 	/* POINT LIGHTS ONLY (direct()): every light a point light without
-	 * fall-off or no-shadows, and shadows on */
-	bool points_only;
+	 * fall-off; all_shadows: shadows on, and no light has no-shadows */
+	bool points_only, all_shadows;
 	/* PLAIN MATERIALS: shader_eval's result (but n) for each of the first
 	 * SHADE_PLAIN materials without a shader (bit i of plain_ok) and for the
 	 * default material, made once: shading points and the surfaces a shadow
@@ -466,10 +466,14 @@ int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx
 	for (uint32_t i = 0; i < s->n_lights; i++)
 		c->total_samples += s->lights[i].shape == LIGHT_POINT ? 1 : s->lights[i].samples;
 	c->cut = SHADE_MIN_WEIGHT / c->total_samples;
-	c->points_only = !s->image.no_shadows;
-	for (uint32_t i = 0; i < s->n_lights; i++)
-		if (s->lights[i].shape != LIGHT_POINT || s->lights[i].fall_off != 0 || s->lights[i].no_shadows)
+	c->points_only = true;
+	c->all_shadows = !s->image.no_shadows;
+	for (uint32_t i = 0; i < s->n_lights; i++) {
+		if (s->lights[i].shape != LIGHT_POINT || s->lights[i].fall_off != 0)
 			c->points_only = false;
+		if (s->lights[i].no_shadows)
+			c->all_shadows = false;
+	}
 	for (uint32_t i = 0; i < s->n_materials; i++)
 		if (s->materials[i].transparency > 0)
 			c->any_transparent = true;
@@ -773,15 +777,16 @@ static bool passes_without(vec3 in, vec3 kcd, vec3 kcs, double ndotl, double wei
  * this makes in a pixel is below SHADE_MIN_WEIGHT. Inlined into its one
  * caller, surf_shade: left to itself gcc stopped inlining it once BLOCK
  * SHADING was added, which cost balls_s4 0.85% (docs/performance.md).
- * points: the context is POINT LIGHTS ONLY (direct() below), a constant
- * that folds away the tests of other shapes, fall-off and no-shadows.
+ * points and all_shadows: the context's flags (POINT LIGHTS ONLY, direct()
+ * below) as constants, which fold away the tests of other shapes and
+ * fall-off, and of no-shadows.
  */
 static inline __attribute__((always_inline)) vec3 direct_body(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng,
 							  vec3 v, const struct shader_mat *m, double kd,
 							  double weight, uint64_t seed, const struct shadow_pre *pre,
-							  uint32_t obj, const bool points)
+							  uint32_t obj, const bool points, const bool all_shadows)
 {
-	bool shadows = points || !c->s->image.no_shadows;
+	bool shadows = all_shadows || !c->s->image.no_shadows;
 	bool want_spec = m->specular != 0;
 	vec3 kcd = v3_scale(m->diff_colour, kd), kcs = v3_scale(m->spec_colour, m->specular);
 	double cut = c->cut;
@@ -826,7 +831,8 @@ static inline __attribute__((always_inline)) vec3 direct_body(const struct shade
 				continue;
 			/* SHADOW PACKETS: a known answer; a blocked ray adds nothing,
 			 * so its term (and highlight) are never made */
-			bool known = shadows && (points || !l->no_shadows) && pre && i < SHADE_PRE_LIGHTS && (pre->known >> i & 1);
+			bool known = shadows && (all_shadows || !l->no_shadows) && pre && i < SHADE_PRE_LIGHTS &&
+				     (pre->known >> i & 1);
 			if (known && (pre->occ >> i & 1))
 				continue;
 			vec3 ldir = w->ldir;
@@ -835,7 +841,7 @@ static inline __attribute__((always_inline)) vec3 direct_body(const struct shade
 			if (!points && l->fall_off != 0)
 				in = v3_scale(in, 1 / xm_pow(dist, l->fall_off));
 			double hl = 0, rv = 0; /* (R.V)^power */
-			bool traced = shadows && (points || !l->no_shadows) && !known, later = false;
+			bool traced = shadows && (all_shadows || !l->no_shadows) && !known, later = false;
 			if (want_spec) {
 				rv = v3_dot(v3_sub(v3_scale(n, 2 * ndotl), ldir), v);
 				if (rv > 0) {
@@ -871,20 +877,24 @@ static inline __attribute__((always_inline)) vec3 direct_body(const struct shade
 
 /*
  * POINT LIGHTS ONLY: in a scene whose lights are all point lights without
- * fall-off or no-shadows, and with shadows on (the SPD scenes), direct_body
- * is compiled a second time with those tests folded to constants: the same
- * operations on the same values, without the per-light loads and branches
- * that only area lights, fall-off and no-shadows need (balls_s4 3.2% fewer
- * instructions, about 1.5% faster; docs/performance.md, round 20).
+ * fall-off, direct_body is compiled again with those tests folded to
+ * constants, and a third time for such a scene where, besides, every light
+ * casts shadows and shadows are on (the SPD scenes; teapot.sce has a light
+ * with no-shadows): the same operations on the same values, without the
+ * per-light loads and branches that only area lights, fall-off and
+ * no-shadows need (balls_s4 3.2% fewer instructions, about 1.5% faster;
+ * teapot 5.7% fewer, 5-6% faster; docs/performance.md, round 20).
  */
 static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng,
 							  vec3 v, const struct shader_mat *m, double kd,
 							  double weight, uint64_t seed, const struct shadow_pre *pre,
 							  uint32_t obj)
 {
+	if (c->points_only && c->all_shadows)
+		return direct_body(c, p, n, ng, v, m, kd, weight, seed, pre, obj, true, true);
 	if (c->points_only)
-		return direct_body(c, p, n, ng, v, m, kd, weight, seed, pre, obj, true);
-	return direct_body(c, p, n, ng, v, m, kd, weight, seed, pre, obj, false);
+		return direct_body(c, p, n, ng, v, m, kd, weight, seed, pre, obj, true, false);
+	return direct_body(c, p, n, ng, v, m, kd, weight, seed, pre, obj, false, false);
 }
 
 /* d reflected about unit n. */

@@ -6,10 +6,11 @@
  * - TWO WAYS AT ONCE: light_ways2's lanes are light_way_at's ways bit for
  *   bit (distance, direction, n.l, lit), light behind, on or beside the
  *   point, at any scale, with special values;
- * - POINT LIGHTS ONLY: the flag is set exactly when every light is a point
- *   light without fall-off or no-shadows and shadows are on, and then
- *   direct_body's folded copy gives the general copy's colours bit for
- *   bit, with the eye hits' shadow packets and without;
+ * - POINT LIGHTS ONLY: the flags are set exactly when every light is a
+ *   point light without fall-off (points_only) and when shadows are on and
+ *   no light has no-shadows (all_shadows), and then direct_body's folded
+ *   copies give the general copy's colours bit for bit, with the eye hits'
+ *   shadow packets and without;
  * - TRANSPARENT BOXES: a shadow segment that may_cross_transparent says
  *   meets no possibly transparent surface is hit by none (accel_occluded
  *   on a scene of transparent triangles only), for random segments and
@@ -259,15 +260,18 @@ static struct scene *points_scene(int variant)
 	return s;
 }
 
-/* direct_body's two copies on hit sf of ray r (weight w, shadow answers
- * pre or none): 1 when their colours differ in a bit. */
+/* direct_body's copy for c's flags against the general one on hit sf of
+ * ray r (weight w, shadow answers pre or none): 1 when their colours
+ * differ in a bit. */
 static int copies_differ(const struct shade_ctx *c, const struct ray *r, const struct surf *sf, double w,
 			 uint64_t seed, const struct shadow_pre *pre, uint32_t obj)
 {
 	const struct shader_mat *m = sf->m;
 	double kd = m->diffuse * (1 - sf->td);
-	vec3 a = direct_body(c, sf->p, sf->n, sf->ng, v3_neg(r->d), m, kd, w, seed, pre, obj, true);
-	vec3 b = direct_body(c, sf->p, sf->n, sf->ng, v3_neg(r->d), m, kd, w, seed, pre, obj, false);
+	vec3 v = v3_neg(r->d);
+	vec3 a = c->all_shadows ? direct_body(c, sf->p, sf->n, sf->ng, v, m, kd, w, seed, pre, obj, true, true)
+				: direct_body(c, sf->p, sf->n, sf->ng, v, m, kd, w, seed, pre, obj, true, false);
+	vec3 b = direct_body(c, sf->p, sf->n, sf->ng, v, m, kd, w, seed, pre, obj, false, false);
 	return memcmp(&a, &b, sizeof a) != 0;
 }
 
@@ -282,8 +286,9 @@ static void test_points_only(void)
 		CHECK(shade_ctx_new(s, a, &c, &err) == 0);
 		if (!a || !c)
 			goto next;
-		CHECK(c->points_only == (variant == 0));
-		if (variant != 0)
+		CHECK(c->points_only == (variant == 0 || variant >= 3));
+		CHECK(c->all_shadows == (variant <= 2));
+		if (!c->points_only)
 			goto next;
 		int compared = 0, lit = 0, differ = 0;
 		const double weights[4] = { 1.0, 0.5, 1.0 / 40, 1.0 / 900 };
@@ -310,7 +315,7 @@ static void test_points_only(void)
 				differ += copies_differ(c, &u[k], &sf[k], w, seed, &pre[k], SHADE_HINT_ANY);
 				differ += copies_differ(c, &u[k], &sf[k], w, seed, NULL, sf[k].obj);
 				vec3 col = direct_body(c, sf[k].p, sf[k].n, sf[k].ng, v3_neg(u[k].d), sf[k].m,
-						       sf[k].m->diffuse, 1.0, seed, NULL, sf[k].obj, true);
+						       sf[k].m->diffuse, 1.0, seed, NULL, sf[k].obj, false, false);
 				lit += maxc(col) > 0;
 				compared += 2;
 			}
@@ -319,8 +324,8 @@ static void test_points_only(void)
 		CHECK(lit > 1000); /* lights reached, with highlights to power */
 		CHECK(differ == 0);
 		if (differ)
-			fprintf(stderr, "POINT LIGHTS ONLY: %d of %d colours differ between the copies\n", differ,
-				compared);
+			fprintf(stderr, "POINT LIGHTS ONLY (variant %d): %d of %d colours differ between the copies\n",
+				variant, differ, compared);
 	next:
 		shade_ctx_free(c);
 		accel_free(a);
