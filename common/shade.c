@@ -24,6 +24,7 @@
 
 #include "common/cancel.h"
 #include "common/rng.h"
+#include "common/shade_tbox.h"
 #include "common/shader.h"
 #include "common/xmath.h"
 
@@ -43,10 +44,6 @@ struct shade_light {
 	double area[3], total_area;
 };
 
-/* Boxes around the surfaces that may be transparent (TRANSPARENT BOXES):
- * at most this many, one per material, the last one taking the rest. */
-#define SHADE_TBOXES 8
-
 #define SHADE_PLAIN 64
 struct shade_ctx {
 	const struct scene *s;
@@ -65,13 +62,7 @@ struct shade_ctx {
 	 * ray crosses (cross_pass) point at them */
 	uint64_t plain_ok;
 	struct shader_mat plain[SHADE_PLAIN], plain_default;
-	/* TRANSPARENT BOXES: when tbox_all, every surface whose material may be
-	 * transparent lies inside one of tbox[0 .. n_tbox-1] */
-	bool tbox_all;
-	uint32_t n_tbox;
-	struct {
-		vec3 c, e; /* centre and half-size */
-	} tbox[SHADE_TBOXES];
+	struct shade_tboxes tb; /* TRANSPARENT BOXES (shade_tbox.h) */
 	/* SHADOW CROSSINGS' filter: cross_pass, and the materials without a
 	 * shader whose transparency is 0 (opaque[n_materials]: the default) */
 	uint8_t *opaque;
@@ -190,7 +181,7 @@ static inline double max3(double a, double b, double c)
 	return m > c ? m : c;
 }
 static double maxc(vec3 a) { return max3(a.x, a.y, a.z); }
-static double maxabs(vec3 a) { return max3(fabs(a.x), fabs(a.y), fabs(a.z)); }
+static double maxabs(vec3 a) { return v3_maxabs(a); }
 
 /* struct light_way from p (normal n) to lp: direct()'s arithmetic. */
 static inline struct light_way light_way_at(vec3 p, vec3 n, vec3 lp)
@@ -249,185 +240,10 @@ static inline void light_ways2(const vec3 p[2], const vec3 n[2], const vec3 lp[2
 #endif
 }
 
-/*
- * TRANSPARENT BOXES. In a scene with transparent materials a shadow ray
- * needs its closest hit (transmittance): a transparent surface in front
- * lets light through, an opaque one does not. But a segment that meets no
- * surface whose material may be transparent has only opaque hits, so its
- * closest hit, if any, is opaque: its transmittance is then 0 exactly when
- * accel_occluded says "occluded" (anything hit in (tmin, tmax) blocks),
- * and what came through so far otherwise: the answer of the cheaper
- * any-hit query, or of a packet.
- *
- * tbox_boxes puts a box around the root objects whose resolved material
- * may be transparent (transparency > 0 or NaN, or a shader, whose pattern
- * may pick or blend in a transparent material): one box per material,
- * SHADE_TBOXES at most. Only triangles and RAW meshes get a box: their
- * watertight test accepts a line only within a few rounding errors of the
- * triangle, relative to the vertices' and the origin's coordinates, and the
- * boxes' margins (TBOX_MARGIN of the box's largest coordinate, TBOX_DYN of
- * the ray's origin and direction, added at each test) are far above that.
- * A root that may show a transparent surface but gets no box (another
- * primitive, a plane, CSG or an instance holding a possibly transparent
- * material) turns the shortcut off (tbox_all false). The margins are below
- * accel_offset_point's 1e-9, so that a ray leaving a transparent mesh
- * through its outer face gets out of its box.
- */
-#define TBOX_MARGIN 0x1p-32
-#define TBOX_DYN 0x1p-40
-/* Objects looked at below CSG and instance roots before giving up (the
- * shortcut is then off): bounds shade_ctx_new's time. */
-#define TBOX_BUDGET 1000000
-
-/* Whether material index mi (SCENE_NONE or out of range: the default
- * material) may give a transparent surface. */
-static bool mat_maybe_transparent(const struct scene *s, uint32_t mi)
+/* The TRANSPARENT BOXES' answer for shadow ray r (shade_tbox.h). */
+static inline bool may_cross_transparent(const struct shade_ctx *c, const struct ray *r)
 {
-	const struct scene_material *m = mi < s->n_materials ? &s->materials[mi] : scene_default_material();
-	return !(m->transparency <= 0) || m->shader.kind != SHADER_NONE;
-}
-
-/*
- * Whether object oi or anything below it (CSG operands, a define's
- * members) names a material that may be transparent; true as well when
- * *budget runs out. Members without a material take their parent's, which
- * the caller has looked at.
- */
-static bool subtree_maybe_transparent(const struct scene *s, uint32_t oi, long *budget, int depth)
-{
-	if (--*budget < 0 || depth > LIM_DEFINE_DEPTH + LIM_CSG_DEPTH || oi >= s->n_objects)
-		return true;
-	struct scene_object tmp;
-	const struct scene_object *o = scene_object(s, oi, &tmp);
-	if (o->material != SCENE_NONE && mat_maybe_transparent(s, o->material))
-		return true;
-	if (o->kind == PRIM_CSG)
-		return subtree_maybe_transparent(s, o->u.csg.operand1, budget, depth + 1) ||
-		       subtree_maybe_transparent(s, o->u.csg.operand2, budget, depth + 1);
-	if (o->kind == PRIM_INSTANCE) {
-		if (o->u.instance.define >= s->n_defines)
-			return true;
-		const struct scene_define *d = &s->defines[o->u.instance.define];
-		for (uint32_t k = 0; k < d->n_objects; k++)
-			if (subtree_maybe_transparent(s, d->objects[k], budget, depth + 1))
-				return true;
-	}
-	return false;
-}
-
-/* Grows box (lo, hi) by vertex p, transformed as accel_build bakes it. */
-static void box_add(const struct scene_object *o, vec3 p, vec3 *lo, vec3 *hi)
-{
-	if (o->has_xform)
-		p = m34_point(&o->xform, p);
-	*lo = v3(p.x < lo->x ? p.x : lo->x, p.y < lo->y ? p.y : lo->y, p.z < lo->z ? p.z : lo->z);
-	*hi = v3(p.x > hi->x ? p.x : hi->x, p.y > hi->y ? p.y : hi->y, p.z > hi->z ? p.z : hi->z);
-}
-
-/* World box of root object o, a triangle or RAW mesh, margin included:
- * false when it has none (another kind, or not finite). */
-static bool root_box(const struct scene *s, const struct scene_object *o, vec3 *lo, vec3 *hi)
-{
-	*lo = v3(INFINITY, INFINITY, INFINITY);
-	*hi = v3(-INFINITY, -INFINITY, -INFINITY);
-	if (o->kind == PRIM_TRIANGLE) {
-		box_add(o, o->u.triangle.a, lo, hi);
-		box_add(o, o->u.triangle.b, lo, hi);
-		box_add(o, o->u.triangle.c, lo, hi);
-	} else if (o->kind == PRIM_RAW && o->u.raw.mesh < s->n_meshes) {
-		const struct scene_mesh *m = &s->meshes[o->u.raw.mesh];
-		for (uint32_t k = 0; k < m->n_vertices; k++)
-			box_add(o, m->vertices[k], lo, hi);
-	} else {
-		return false;
-	}
-	double big = max3(maxabs(*lo), maxabs(*hi), 0);
-	if (!(big < 0x1p900))
-		return false; /* infinite, NaN, empty or too large for the margins */
-	double e = big * TBOX_MARGIN + 0x1p-900;
-	*lo = v3_sub(*lo, v3(e, e, e));
-	*hi = v3_add(*hi, v3(e, e, e));
-	return true;
-}
-
-/* Fills c's TRANSPARENT BOXES (c->s set, c->any_transparent known). */
-static void tbox_boxes(struct shade_ctx *c)
-{
-	const struct scene *s = c->s;
-	c->n_tbox = 0;
-	c->tbox_all = false;
-	if (!c->any_transparent || mat_maybe_transparent(s, SCENE_NONE))
-		return;
-	vec3 lo[SHADE_TBOXES], hi[SHADE_TBOXES];
-	uint32_t mat[SHADE_TBOXES];
-	long budget = TBOX_BUDGET;
-	for (uint32_t k = 0; k < s->n_roots; k++) {
-		uint32_t oi = s->roots[k];
-		if (oi >= s->n_objects)
-			return;
-		struct scene_object tmp;
-		const struct scene_object *o = scene_object(s, oi, &tmp);
-		if (o->kind == PRIM_CSG || o->kind == PRIM_INSTANCE) {
-			if (subtree_maybe_transparent(s, oi, &budget, 0))
-				return;
-			continue;
-		}
-		if (!mat_maybe_transparent(s, o->material))
-			continue;
-		vec3 l, h;
-		if (!root_box(s, o, &l, &h))
-			return;
-		uint32_t j = 0;
-		while (j < c->n_tbox && mat[j] != o->material && j < SHADE_TBOXES - 1)
-			j++;
-		if (j == c->n_tbox) {
-			mat[j] = o->material;
-			lo[j] = l;
-			hi[j] = h;
-			c->n_tbox++;
-		} else {
-			lo[j] = v3_min(lo[j], l);
-			hi[j] = v3_max(hi[j], h);
-		}
-	}
-	for (uint32_t j = 0; j < c->n_tbox; j++) { /* centre and half-size, rounding covered */
-		double big = max3(maxabs(lo[j]), maxabs(hi[j]), 0);
-		c->tbox[j].c = v3_scale(v3_add(lo[j], hi[j]), 0.5);
-		c->tbox[j].e = v3_add(v3_scale(v3_sub(hi[j], lo[j]), 0.5), v3(big * TBOX_DYN, big * TBOX_DYN, big * TBOX_DYN));
-	}
-	c->tbox_all = true;
-}
-
-/*
- * Whether the segment of shadow ray r (t in [0, 1]) may meet a surface
- * whose material may be transparent: false only when it provably does
- * not. The separating-axis test of a segment and a box (the box's three
- * axes, and the segment's direction crossed with each), with r's rounding
- * margin added to the boxes.
- */
-static bool may_cross_transparent(const struct shade_ctx *c, const struct ray *r)
-{
-	if (!c->tbox_all)
-		return true;
-	vec3 h = v3_scale(r->d, 0.5), q = v3_add(r->o, h); /* half the segment, its middle */
-	double ax = fabs(h.x), ay = fabs(h.y), az = fabs(h.z);
-	double mu = TBOX_DYN * (maxabs(r->o) + 2 * max3(ax, ay, az)) + 0x1p-900;
-	if (!(mu < 0x1p-60 * 0x1p900))
-		return true; /* NaN, infinite, or large enough to overflow below */
-	for (uint32_t j = 0; j < c->n_tbox; j++) {
-		vec3 m = v3_sub(q, c->tbox[j].c);
-		double ex = c->tbox[j].e.x + mu, ey = c->tbox[j].e.y + mu, ez = c->tbox[j].e.z + mu;
-		if (fabs(m.x) > ex + ax || fabs(m.y) > ey + ay || fabs(m.z) > ez + az)
-			continue;
-		if (fabs(m.y * h.z - m.z * h.y) > ey * az + ez * ay)
-			continue;
-		if (fabs(m.z * h.x - m.x * h.z) > ex * az + ez * ax)
-			continue;
-		if (fabs(m.x * h.y - m.y * h.x) > ex * ay + ey * ax)
-			continue;
-		return true;
-	}
-	return false;
+	return shade_tboxes_may_cross(&c->tb, r);
 }
 
 static int cross_filter_init(struct shade_ctx *c);
@@ -484,7 +300,7 @@ int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx
 			c->plain_ok |= 1ull << i;
 		}
 	shader_eval(s, SCENE_NONE, &origin, &c->plain_default);
-	tbox_boxes(c);
+	shade_tboxes_find(s, c->any_transparent, &c->tb);
 	if (cross_filter_init(c))
 		goto oom;
 	*out = c;
@@ -882,8 +698,9 @@ static inline __attribute__((always_inline)) vec3 direct_body(const struct shade
  * casts shadows and shadows are on (the SPD scenes; teapot.sce has a light
  * with no-shadows): the same operations on the same values, without the
  * per-light loads and branches that only area lights, fall-off and
- * no-shadows need (balls_s4 3.2% fewer instructions, about 1.5% faster;
- * teapot 5.7% fewer, 5-6% faster; docs/performance.md, round 20).
+ * no-shadows need (balls_s4 3.2% fewer instructions, 0-2.5% faster as
+ * the host's load goes; teapot 5.0% fewer, 3.7-5.1% faster;
+ * docs/performance.md, round 20).
  */
 static inline __attribute__((always_inline)) vec3 direct(const struct shade_ctx *c, vec3 p, vec3 n, vec3 ng,
 							  vec3 v, const struct shader_mat *m, double kd,

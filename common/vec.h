@@ -65,6 +65,13 @@ static inline vec3 v3_lerp(vec3 a, vec3 b, double t)
 static inline vec3 v3_min(vec3 a, vec3 b) { return v3(fmin(a.x, b.x), fmin(a.y, b.y), fmin(a.z, b.z)); }
 static inline vec3 v3_max(vec3 a, vec3 b) { return v3(fmax(a.x, b.x), fmax(a.y, b.y), fmax(a.z, b.z)); }
 static inline double v3_comp(vec3 a, int axis) { return axis == 0 ? a.x : axis == 1 ? a.y : a.z; }
+/* The largest |component| (plain comparisons, NaN as they order it). */
+static inline double v3_maxabs(vec3 a)
+{
+	double x = fabs(a.x), y = fabs(a.y), z = fabs(a.z);
+	double m = x > y ? x : y;
+	return m > z ? m : z;
+}
 static inline int v3_finite(vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
 
 static inline mat34 m34_identity(void)

@@ -1,5 +1,5 @@
 #!/bin/sh
-# render_tbox.sh - TRANSPARENT BOXES (common/shade.c): a shadow ray that
+# render_tbox.sh - TRANSPARENT BOXES (common/shade_tbox.h): a shadow ray that
 # provably meets no surface that may be transparent is traced with an
 # any-hit query (or a packet) instead of closest hits. gears_s2 (glass gears
 # made of triangles: the shortcut is on) must render byte for byte as the

@@ -187,7 +187,7 @@ static struct accel A;
 static struct scene *cur; /* the scene new_scene made last */
 
 /* The mock's primitive as a root object of the scene as well: shading
- * reads the scene's objects (shade.c, TRANSPARENT BOXES), which must be
+ * reads the scene's objects (shade_tbox.c, TRANSPARENT BOXES), which must be
  * what its accel was built from. */
 static void add_root(enum prim_kind kind, vec3 c, double r, vec3 n, uint32_t mat)
 {

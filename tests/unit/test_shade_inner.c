@@ -166,7 +166,7 @@ static void test_tboxes(void)
 	CHECK(shade_ctx_new(s, a, &c, &err) == 0);
 	if (!a || !c)
 		goto done;
-	CHECK(c->tbox_all && c->n_tbox == 2);
+	CHECK(c->tb.all && c->tb.n == 2);
 	int missed = 0, wrong = 0;
 	for (int i = 0; i < 200000; i++) {
 		struct ray r;
@@ -354,7 +354,7 @@ static void test_tboxes_off(void)
 	struct shade_ctx *c = NULL;
 	CHECK(accel_build(s, &a, &err) == 0);
 	CHECK(shade_ctx_new(s, a, &c, &err) == 0);
-	CHECK(c && !c->tbox_all);
+	CHECK(c && !c->tb.all);
 	struct ray r = { v3(10, 10, 10), v3(1, 0, 0), 0, 1 };
 	CHECK(c && may_cross_transparent(c, &r));
 	shade_ctx_free(c);
