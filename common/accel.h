@@ -200,4 +200,11 @@ vec3 accel_offset_point(vec3 p, vec3 ng, vec3 dir);
 /* Brute force reference (no BVH), for tests: same contract as accel_intersect. */
 bool accel_intersect_brute(const struct accel *a, const struct ray *r, struct hit *h);
 
+/* Whether the AVX2 paths run: single rays' node tests (WIDE NODES IN AVX2,
+ * accel_box.h) and the eye hits' shading (DIRECT IN FOURS, shade.c): the
+ * CPU and its OS support AVX2 and the environment's PORTRAY_SIMD is not
+ * "sse2" (which keeps the SSE2 ones, to compare them: the two give the
+ * same bytes). Asked by each accel_build and shade context. */
+bool accel_use_avx2(void);
+
 #endif

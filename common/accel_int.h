@@ -217,12 +217,6 @@ struct accel {
 	struct accel_stats st;
 };
 
-/* Whether single rays take the AVX2 node tests (WIDE NODES IN AVX2,
- * accel_box.h): the CPU and its OS support AVX2 and the environment's
- * PORTRAY_SIMD is not "sse2" (which keeps the SSE2 ones, to compare them:
- * the two give the same bytes). Asked by each accel_build. */
-bool accel_use_avx2(void);
-
 /*
  * The inverse transform (parent -> define space) of instance record si,
  * rounded to float and back: what the instance's geometry is, for rays,

@@ -28,6 +28,14 @@
 #include "common/shader.h"
 #include "common/xmath.h"
 
+/* DIRECT IN FOURS (shade_direct4.h): x86-64 with GCC's or clang's vector
+ * extensions, AVX2 chosen at run time */
+#if defined(__x86_64__) && defined(__SSE2__) && (defined(__GNUC__) || defined(__clang__)) && !defined(PORTRAY_NO_AVX2)
+#define SHADE_DIRECT4 1
+#else
+#define SHADE_DIRECT4 0
+#endif
+
 /* Stream tags for rng_derive: one purpose each. */
 #define TAG_LIGHT 0x4c49474854000000ull /* + light index */
 #define TAG_REFLECT 0x5245464cull
@@ -56,6 +64,11 @@ struct shade_ctx {
 	/* POINT LIGHTS ONLY (direct()): every light a point light without
 	 * fall-off; all_shadows: shadows on, and no light has no-shadows */
 	bool points_only, all_shadows;
+	/* DIRECT IN FOURS (shade_direct4.h): the eye hits' direct() four at a
+	 * time, on AVX2, where points_only and some light's ways are not made
+	 * by the shadow packets (a light without shadows, or more lights than
+	 * SHADE_PRE_WAYS) */
+	bool direct4;
 	/* PLAIN MATERIALS: shader_eval's result (but n) for each of the first
 	 * SHADE_PLAIN materials without a shader (bit i of plain_ok) and for the
 	 * default material, made once: shading points and the surfaces a shadow
@@ -293,6 +306,9 @@ int shade_ctx_new(const struct scene *s, const struct accel *a, struct shade_ctx
 	for (uint32_t i = 0; i < s->n_materials; i++)
 		if (s->materials[i].transparency > 0)
 			c->any_transparent = true;
+#if SHADE_DIRECT4
+	c->direct4 = c->points_only && (!c->all_shadows || s->n_lights > SHADE_PRE_WAYS) && accel_use_avx2();
+#endif
 	const struct shader_point origin = { v3(0, 0, 0), 0, 0, v3(0, 0, 1) }; /* read for n alone */
 	for (uint32_t i = 0; i < s->n_materials && i < SHADE_PLAIN; i++)
 		if (s->materials[i].shader.kind == SHADER_NONE) {
@@ -857,12 +873,11 @@ static inline bool refract_ray(const struct shade_ctx *c, const struct ray *r, c
  * known) for the hit's own direct lighting: direct + reflection +
  * refraction, summed in that order (block_shade sums the same terms in the
  * same order). */
-static vec3 surf_shade(const struct shade_ctx *c, const struct ray *r, const struct surf *sf, int depth,
-		       double weight, uint64_t seed, const struct shadow_pre *pre)
+/* surf_shade's terms after the direct one (col): reflection, then refraction. */
+static inline __attribute__((always_inline)) vec3 surf_secondary(const struct shade_ctx *c, const struct ray *r,
+								  const struct surf *sf, int depth, double weight,
+								  uint64_t seed, vec3 col)
 {
-	const struct shader_mat *m = sf->m;
-	vec3 col = direct(c, sf->p, sf->n, sf->ng, v3_neg(r->d), m, m->diffuse * (1 - sf->td), weight, seed, pre,
-			  depth ? sf->obj : SHADE_HINT_ANY);
 	if (depth >= LIM_TRACE_DEPTH)
 		return col;
 	struct ray sr;
@@ -878,6 +893,19 @@ static vec3 surf_shade(const struct shade_ctx *c, const struct ray *r, const str
 	}
 	return col;
 }
+
+static vec3 surf_shade(const struct shade_ctx *c, const struct ray *r, const struct surf *sf, int depth,
+		       double weight, uint64_t seed, const struct shadow_pre *pre)
+{
+	const struct shader_mat *m = sf->m;
+	vec3 col = direct(c, sf->p, sf->n, sf->ng, v3_neg(r->d), m, m->diffuse * (1 - sf->td), weight, seed, pre,
+			  depth ? sf->obj : SHADE_HINT_ANY);
+	return surf_secondary(c, r, sf, depth, weight, seed, col);
+}
+
+#if SHADE_DIRECT4
+#include "common/shade_direct4.h"
+#endif
 
 bool shade_eye_ray(const struct ray *r, struct ray *u)
 {
@@ -1051,8 +1079,10 @@ static void occlusion_packet(const struct shade_ctx *c, uint32_t i, struct ray r
 	}
 }
 
-static void shadow_packets(const struct shade_ctx *c, const struct surf sf[4], const bool ok[4], int n,
-			   struct shadow_pre pre[4])
+/* always inlined into its caller (as gcc's LTO build does anyway): the
+ * hits it reads are only those prepared (ok), which a call would hide */
+static inline __attribute__((always_inline)) void shadow_packets(const struct shade_ctx *c, const struct surf sf[4],
+								  const bool ok[4], int n, struct shadow_pre pre[4])
 {
 	for (int k = 0; k < 4; k++)
 		pre[k].tval = NULL;
@@ -1293,6 +1323,23 @@ void shade_eye_hit4(const struct shade_ctx *c, const struct ray u[4], const stru
 		ok[k] = h[k] && surf_prepare(c, &u[k], h[k], &sf[k]);
 	struct shadow_pre pre[4];
 	shadow_packets(c, sf, ok, n, pre);
+#if SHADE_DIRECT4
+	if (c->direct4) { /* DIRECT IN FOURS, then each hit's secondary rays */
+		vec3 v[4], dc[4];
+		for (int k = 0; k < 4; k++)
+			v[k] = k < n ? v3_neg(u[k].d) : v3(0, 0, 0);
+		direct4(c, sf, v, ok, n, pre, dc);
+		for (int k = 0; k < n; k++) {
+			if (!ok[k]) {
+				out[k] = v3(0, 0, 0);
+				continue;
+			}
+			vec3 col = surf_secondary(c, &u[k], &sf[k], 0, 1.0, seed[k], dc[k]);
+			out[k] = v3_load_split(&col);
+		}
+		return;
+	}
+#endif
 	for (int k = 0; k < n; k++) {
 		if (!ok[k]) {
 			out[k] = v3(0, 0, 0);

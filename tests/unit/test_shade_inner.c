@@ -11,6 +11,10 @@
  *   no light has no-shadows (all_shadows), and then direct_body's folded
  *   copies give the general copy's colours bit for bit, with the eye hits'
  *   shadow packets and without;
+ * - DIRECT IN FOURS: direct4's four lanes are direct_body's colours bit
+ *   for bit on blocks of one to four eye hits, with the shadow packets'
+ *   answers, with some lanes' light ways left to direct4 and with no
+ *   answers at all (where the CPU has AVX2);
  * - TRANSPARENT BOXES: a shadow segment that may_cross_transparent says
  *   meets no possibly transparent surface is hit by none (accel_occluded
  *   on a scene of transparent triangles only), for random segments and
@@ -333,6 +337,95 @@ static void test_points_only(void)
 	}
 }
 
+#if SHADE_DIRECT4
+/*
+ * DIRECT IN FOURS: direct4's lanes against direct_body (its folded copy
+ * for c's flags, weight 1, the eye hit's shadow answers) on blocks of one
+ * to four eye hits, some missing; with the packets' answers as made, with
+ * some lanes' LIGHT WAYS dropped (direct4 makes those itself, beside the
+ * others' given ones) and with no answers at all (every shadow ray traced
+ * lane by lane). Returns the number of colours compared.
+ */
+static int check_direct4(const struct shade_ctx *c, const struct accel *a, int variant, int *lit)
+{
+	int compared = 0, differ = 0;
+	for (int i = 0; i < 3000; i++) {
+		vec3 eye = rnd_v(-7, 7), aim = rnd_v(-2, 2);
+		struct ray u[4];
+		struct surf sf[4];
+		bool ok[4];
+		int n = 1 + i % 4;
+		for (int k = 0; k < 4; k++) {
+			vec3 d = v3_norm(v3_sub(v3_add(aim, rnd_v(-0.05, 0.05)), eye));
+			u[k] = (struct ray){ eye, d, 0, INFINITY };
+			struct hit h;
+			ok[k] = k < n && accel_intersect(a, &u[k], &h) && surf_prepare(c, &u[k], &h, &sf[k]);
+		}
+		struct shadow_pre pre[4];
+		shadow_packets(c, sf, ok, n, pre);
+		int mode = i % 3;
+		for (int k = 0; k < 4; k++) {
+			if (mode == 1 && (i / 3 + k) % 2)
+				pre[k].wknown = 0; /* this lane's ways: direct4's own */
+			if (mode == 2)
+				pre[k].known = pre[k].occ = pre[k].wknown = 0; /* nothing known */
+		}
+		vec3 v[4], col[4];
+		for (int k = 0; k < 4; k++)
+			v[k] = v3_neg(u[k].d);
+		direct4(c, sf, v, ok, n, pre, col);
+		for (int k = 0; k < n; k++) {
+			if (!ok[k])
+				continue;
+			const struct shader_mat *m = sf[k].m;
+			double kd = m->diffuse * (1 - sf[k].td);
+			uint64_t seed = (uint64_t)i * 4 + (uint64_t)k;
+			vec3 want = c->all_shadows ? direct_body(c, sf[k].p, sf[k].n, sf[k].ng, v[k], m, kd, 1.0, seed,
+								  &pre[k], SHADE_HINT_ANY, true, true)
+						   : direct_body(c, sf[k].p, sf[k].n, sf[k].ng, v[k], m, kd, 1.0, seed,
+								  &pre[k], SHADE_HINT_ANY, true, false);
+			differ += memcmp(&want, &col[k], sizeof want) != 0;
+			*lit += maxc(want) > 0;
+			compared++;
+		}
+	}
+	CHECK(differ == 0);
+	if (differ)
+		fprintf(stderr, "DIRECT IN FOURS (variant %d): %d of %d colours differ from direct_body's\n", variant,
+			differ, compared);
+	return compared;
+}
+#endif
+
+static void test_direct4(void)
+{
+#if SHADE_DIRECT4
+	if (!accel_use_avx2()) {
+		printf("DIRECT IN FOURS: not checked (no AVX2 here)\n");
+		return;
+	}
+	int compared = 0, lit = 0;
+	for (int variant = 0; variant < 5; variant++) {
+		struct scene *s = points_scene(variant);
+		struct scene_error err;
+		struct accel *a = NULL;
+		struct shade_ctx *c = NULL;
+		CHECK(accel_build(s, &a, &err) == 0);
+		CHECK(shade_ctx_new(s, a, &c, &err) == 0);
+		if (a && c && c->points_only) {
+			/* taken where some light's ways are not the packets' */
+			CHECK(c->direct4 == !c->all_shadows);
+			compared += check_direct4(c, a, variant, &lit);
+		}
+		shade_ctx_free(c);
+		accel_free(a);
+		scene_free(s);
+	}
+	CHECK(compared > 10000);
+	CHECK(lit > 5000);
+#endif
+}
+
 /* The shortcut is off when a possibly transparent surface gets no box. */
 static void test_tboxes_off(void)
 {
@@ -366,6 +459,7 @@ int main(void)
 {
 	test_offset();
 	test_ways2();
+	test_direct4();
 	test_points_only();
 	test_tboxes();
 	test_tboxes_off();
