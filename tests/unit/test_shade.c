@@ -104,6 +104,17 @@ bool accel_occluded(const struct accel *a, const struct ray *r)
 	return false;
 }
 
+/* As the library's (accel.c): the AVX2 paths, shading's DIRECT IN FOURS
+ * among them, where the CPU has AVX2, so the mock renders take them too. */
+bool accel_use_avx2(void)
+{
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+	return __builtin_cpu_supports("avx2");
+#else
+	return false;
+#endif
+}
+
 /* The hint changes no answer (accel.h): the mock ignores it. */
 bool accel_occluded_hint(const struct accel *a, const struct ray *r, uint32_t *hint)
 {
