@@ -8,37 +8,40 @@
  * per light (the way to the light: a square root and a division; the
  * highlight's reflection; the Phong term; the cut-off test), the same
  * operations for the four hits of a block: here each step is one vector
- * operation across the four (GCC's vector extensions: two SSE2 pairs, or
- * one AVX2 register), each lane doing exactly what direct_body does for
- * its hit, in the same order with the same roundings (no contraction:
- * -ffp-contract=off), so every colour is direct_body's to the bit. Where
- * direct_body skips a light for a hit (unlit, blocked, below the cut), the
- * lane's term is computed anyway and not added. What is not the same for
- * the four (the highlight's tests and pow, a shadow ray the packets did
- * not trace) is done lane by lane with direct_body's own functions.
- * tests/unit/test_shade_inner.c compares the two on every eye hit of five
- * scenes.
+ * operation across the four (GCC's and clang's vector extensions in
+ * functions compiled for AVX2, taken where accel_use_avx2 says so), each
+ * lane doing exactly what direct_body does for its hit, in the same order
+ * with the same roundings (no contraction: -ffp-contract=off, and AVX2
+ * has no fused operations), so every colour is direct_body's to the bit.
+ * Where direct_body skips a light for a hit (unlit, blocked, below the
+ * cut), the lane's term is computed anyway and not added. What is not the
+ * same for the four (the highlight's tests and power, a shadow ray the
+ * packets did not trace) is done lane by lane with direct_body's own
+ * functions. The context takes this path (shade_ctx.direct4) only where
+ * some light's ways are not the shadow packets' (docs/performance.md,
+ * round 21); tests/unit/test_shade_inner.c compares it with direct_body.
  */
 
 #include <immintrin.h>
 
+#define V4_FN static inline __attribute__((always_inline, target("avx2")))
+
 typedef double v4d __attribute__((vector_size(32)));
 typedef int64_t v4m __attribute__((vector_size(32))); /* a lane: all ones or 0 */
-
-static inline __attribute__((always_inline, target("avx2"))) v4d v4_sel(v4m m, v4d a, v4d b) { return (v4d)(((v4m)a & m) | ((v4m)b & ~m)); }
-static inline __attribute__((always_inline, target("avx2"))) v4d v4_all(double x) { return (v4d){ x, x, x, x }; }
 
 struct v4vec {
 	v4d x, y, z;
 };
 
-/* v3_dot, lane by lane: (a.x b.x + a.y b.y) + a.z b.z */
-static inline __attribute__((always_inline, target("avx2"))) v4d v4_dot(struct v4vec a, struct v4vec b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+V4_FN v4d v4_sel(v4m m, v4d a, v4d b) { return (v4d)(((v4m)a & m) | ((v4m)b & ~m)); }
 
-static inline __attribute__((always_inline, target("avx2"))) vec3 v4_lane(struct v4vec a, int k) { return v3(a.x[k], a.y[k], a.z[k]); }
+V4_FN v4d v4_all(double x) { return (v4d){ x, x, x, x }; }
+
+/* v3_dot, lane by lane: (a.x b.x + a.y b.y) + a.z b.z */
+V4_FN v4d v4_dot(struct v4vec a, struct v4vec b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
 /* v3_maxabs lane by lane: the same comparisons, NaN as they order it. */
-static inline __attribute__((always_inline, target("avx2"))) v4d v4_maxabs(struct v4vec a)
+V4_FN v4d v4_maxabs(struct v4vec a)
 {
 	const v4m abs = (v4m){ INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX };
 	v4d x = (v4d)((v4m)a.x & abs), y = (v4d)((v4m)a.y & abs), z = (v4d)((v4m)a.z & abs);
@@ -46,10 +49,11 @@ static inline __attribute__((always_inline, target("avx2"))) v4d v4_maxabs(struc
 	return v4_sel(m > z, m, z);
 }
 
-/* Lanes from four doubles, a mask from four bits: built in registers (a
- * lane written into a vector in memory and read back whole waits on a
- * failed store forwarding, which cost more than the arithmetic saved). */
-static inline __attribute__((always_inline, target("avx2"))) v4d v4_of(const double a[4])
+/* LANES IN REGISTERS: lanes from four doubles just written, each read on
+ * its own (a vector read whole right after its lanes were stored one by
+ * one waits on a failed store forwarding, which cost more than the
+ * arithmetic saved); masks from four bits by a table. */
+V4_FN v4d v4_of(const double a[4])
 {
 	__m128d lo = _mm_loadh_pd(_mm_load_sd(&a[0]), &a[1]), hi = _mm_loadh_pd(_mm_load_sd(&a[2]), &a[3]);
 	return (v4d)_mm256_insertf128_pd(_mm256_castpd128_pd256(lo), hi, 1);
@@ -61,7 +65,7 @@ static const v4m v4_masks[16] __attribute__((aligned(32))) = {
 #undef M
 };
 
-static inline __attribute__((always_inline, target("avx2"))) v4m v4_mask(unsigned b) { return v4_masks[b & 15]; }
+V4_FN v4m v4_mask(unsigned b) { return v4_masks[b & 15]; }
 
 /*
  * direct(c, p, n, ng, v, m, kd, 1.0, seed, &pre[k], SHADE_HINT_ANY) for the
@@ -69,11 +73,8 @@ static inline __attribute__((always_inline, target("avx2"))) v4m v4_mask(unsigne
  * col[k], with c->points_only: what surf_shade's direct term is at depth 0.
  * all_shadows: c->all_shadows, folded as in direct_body.
  */
-static inline __attribute__((always_inline, target("avx2"))) void direct4_body(const struct shade_ctx *c,
-										const struct surf sf[4],
-										const vec3 v[4], const bool ok[4],
-										int n, const struct shadow_pre pre[4],
-										vec3 col[4], const bool all_shadows)
+V4_FN void direct4_body(const struct shade_ctx *c, const struct surf sf[4], const vec3 v[4], const bool ok[4], int n,
+			 const struct shadow_pre pre[4], vec3 col[4], const bool all_shadows)
 {
 	const bool shadows = all_shadows || !c->s->image.no_shadows;
 	const double cut = c->cut; /* x 1 sample: cut * n_samples is cut */
@@ -96,8 +97,7 @@ static inline __attribute__((always_inline, target("avx2"))) void direct4_body(c
 		want_spec[k] = m[k]->specular != 0;
 		power[k] = m[k]->spec_power;
 	}
-	/* lanes straight from the hits and materials (not through an array
-	 * written here: LANES IN REGISTERS) */
+	/* lanes straight from the hits and materials (LANES IN REGISTERS) */
 #define LANES(e) ((v4d){ e(0), e(1), e(2), e(3) })
 #define PX(k) sf[j[k]].p.x
 #define PY(k) sf[j[k]].p.y
@@ -276,11 +276,14 @@ static inline __attribute__((always_inline, target("avx2"))) void direct4_body(c
 }
 
 /* direct4_body with the context's flag folded (c->points_only holds). */
-static __attribute__((target("avx2"))) void direct4(const struct shade_ctx *c, const struct surf sf[4], const vec3 v[4], const bool ok[4], int n,
-		    const struct shadow_pre pre[4], vec3 col[4])
+static __attribute__((target("avx2"))) void direct4(const struct shade_ctx *c, const struct surf sf[4],
+						    const vec3 v[4], const bool ok[4], int n,
+						    const struct shadow_pre pre[4], vec3 col[4])
 {
 	if (c->all_shadows)
 		direct4_body(c, sf, v, ok, n, pre, col, true);
 	else
 		direct4_body(c, sf, v, ok, n, pre, col, false);
 }
+
+#undef V4_FN

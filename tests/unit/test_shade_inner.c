@@ -279,16 +279,33 @@ static int copies_differ(const struct shade_ctx *c, const struct ray *r, const s
 	return memcmp(&a, &b, sizeof a) != 0;
 }
 
+/* points_scene(variant), its accel and its shading context; false when
+ * one could not be made (a failed check) */
+static bool points_setup(int variant, struct scene **s, struct accel **a, struct shade_ctx **c)
+{
+	struct scene_error err;
+	*s = points_scene(variant);
+	*a = NULL;
+	*c = NULL;
+	CHECK(accel_build(*s, a, &err) == 0);
+	CHECK(shade_ctx_new(*s, *a, c, &err) == 0);
+	return *a && *c;
+}
+
+static void points_teardown(struct scene *s, struct accel *a, struct shade_ctx *c)
+{
+	shade_ctx_free(c);
+	accel_free(a);
+	scene_free(s);
+}
+
 static void test_points_only(void)
 {
 	for (int variant = 0; variant < 5; variant++) {
-		struct scene *s = points_scene(variant);
-		struct scene_error err;
-		struct accel *a = NULL;
-		struct shade_ctx *c = NULL;
-		CHECK(accel_build(s, &a, &err) == 0);
-		CHECK(shade_ctx_new(s, a, &c, &err) == 0);
-		if (!a || !c)
+		struct scene *s;
+		struct accel *a;
+		struct shade_ctx *c;
+		if (!points_setup(variant, &s, &a, &c))
 			goto next;
 		CHECK(c->points_only == (variant == 0 || variant >= 3));
 		CHECK(c->all_shadows == (variant <= 2));
@@ -331,9 +348,7 @@ static void test_points_only(void)
 			fprintf(stderr, "POINT LIGHTS ONLY (variant %d): %d of %d colours differ between the copies\n",
 				variant, differ, compared);
 	next:
-		shade_ctx_free(c);
-		accel_free(a);
-		scene_free(s);
+		points_teardown(s, a, c);
 	}
 }
 
@@ -406,20 +421,15 @@ static void test_direct4(void)
 	}
 	int compared = 0, lit = 0;
 	for (int variant = 0; variant < 5; variant++) {
-		struct scene *s = points_scene(variant);
-		struct scene_error err;
-		struct accel *a = NULL;
-		struct shade_ctx *c = NULL;
-		CHECK(accel_build(s, &a, &err) == 0);
-		CHECK(shade_ctx_new(s, a, &c, &err) == 0);
-		if (a && c && c->points_only) {
+		struct scene *s;
+		struct accel *a;
+		struct shade_ctx *c;
+		if (points_setup(variant, &s, &a, &c) && c->points_only) {
 			/* taken where some light's ways are not the packets' */
 			CHECK(c->direct4 == !c->all_shadows);
 			compared += check_direct4(c, a, variant, &lit);
 		}
-		shade_ctx_free(c);
-		accel_free(a);
-		scene_free(s);
+		points_teardown(s, a, c);
 	}
 	CHECK(compared > 10000);
 	CHECK(lit > 5000);
