@@ -164,17 +164,12 @@ V4_FN void direct4_body(const struct shade_ctx *c, const struct surf sf[4], cons
 		unsigned lit = 0;
 		if (wk != live) {
 			struct v4vec TO = { v4_all(lp.x) - P.x, v4_all(lp.y) - P.y, v4_all(lp.z) - P.z };
-			v4d dd = v4_dot(TO, TO);
-			double ds[4];
-			for (int k = 0; k < 4; k++)
-				ds[k] = sqrt(dd[k]);
-			dist = v4_of(ds);
+			dist = (v4d)_mm256_sqrt_pd((__m256d)v4_dot(TO, TO)); /* sqrt: correctly rounded, as sqrt() */
 			v4d inv = v4_all(1) / dist;
 			LD = (struct v4vec){ TO.x * inv, TO.y * inv, TO.z * inv };
 			ndotl = v4_dot(N, LD);
 			v4m lm = (dist > v4_all(0)) & ~(ndotl <= v4_all(0));
-			for (int k = 0; k < 4; k++)
-				lit |= (unsigned)(lm[k] != 0 && !(wk >> k & 1)) << k;
+			lit = (unsigned)_mm256_movemask_pd((__m256d)lm) & ~wk;
 		}
 		if (wk) {
 			const struct light_way *w[4];
@@ -236,10 +231,8 @@ V4_FN void direct4_body(const struct shade_ctx *c, const struct surf sf[4], cons
 		struct v4vec T = { v4_all(in.x) * (KCD.x * ndotl + KCS.x * hl), v4_all(in.y) * (KCD.y * ndotl + KCS.y * hl),
 				   v4_all(in.z) * (KCD.z * ndotl + KCS.z * hl) };
 		/* the cut (weight 1): not for a POW AFTER SHADOW lane */
-		v4m low = v4_maxabs(T) < v4_all(cut);
-		for (int k = 0; k < 4; k++)
-			if ((act >> k & 1) && !(later >> k & 1) && low[k])
-				act &= ~(1u << k);
+		unsigned low = (unsigned)_mm256_movemask_pd((__m256d)(v4_maxabs(T) < v4_all(cut)));
+		act &= ~(low & ~later);
 		if (act & traced) { /* a shadow ray the packets did not trace */
 			double t3[3][4];
 			for (int k = 0; k < 4; k++)
