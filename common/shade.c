@@ -869,10 +869,6 @@ static inline bool refract_ray(const struct shade_ctx *c, const struct ray *r, c
 	return true;
 }
 
-/* The second half of trace_hit, with the shadow answers of pre (NULL: none
- * known) for the hit's own direct lighting: direct + reflection +
- * refraction, summed in that order (block_shade sums the same terms in the
- * same order). */
 /* surf_shade's terms after the direct one (col): reflection, then refraction. */
 static inline __attribute__((always_inline)) vec3 surf_secondary(const struct shade_ctx *c, const struct ray *r,
 								  const struct surf *sf, int depth, double weight,
@@ -894,6 +890,10 @@ static inline __attribute__((always_inline)) vec3 surf_secondary(const struct sh
 	return col;
 }
 
+/* The second half of trace_hit, with the shadow answers of pre (NULL: none
+ * known) for the hit's own direct lighting: direct + reflection +
+ * refraction, summed in that order (block_shade sums the same terms in the
+ * same order). */
 static vec3 surf_shade(const struct shade_ctx *c, const struct ray *r, const struct surf *sf, int depth,
 		       double weight, uint64_t seed, const struct shadow_pre *pre)
 {
