@@ -1323,29 +1323,18 @@ void shade_eye_hit4(const struct shade_ctx *c, const struct ray u[4], const stru
 		ok[k] = h[k] && surf_prepare(c, &u[k], h[k], &sf[k]);
 	struct shadow_pre pre[4];
 	shadow_packets(c, sf, ok, n, pre);
+	vec3 dc[4] = { v3(0, 0, 0), v3(0, 0, 0), v3(0, 0, 0), v3(0, 0, 0) };
 #if SHADE_DIRECT4
-	if (c->direct4) { /* DIRECT IN FOURS, then each hit's secondary rays */
-		vec3 v[4], dc[4];
-		for (int k = 0; k < 4; k++)
-			v[k] = k < n ? v3_neg(u[k].d) : v3(0, 0, 0);
-		direct4(c, sf, v, ok, n, pre, dc);
-		for (int k = 0; k < n; k++) {
-			if (!ok[k]) {
-				out[k] = v3(0, 0, 0);
-				continue;
-			}
-			vec3 col = surf_secondary(c, &u[k], &sf[k], 0, 1.0, seed[k], dc[k]);
-			out[k] = v3_load_split(&col);
-		}
-		return;
-	}
+	if (c->direct4) /* DIRECT IN FOURS: the direct terms; each hit's secondary rays below */
+		direct4(c, u, sf, ok, n, pre, dc);
 #endif
 	for (int k = 0; k < n; k++) {
 		if (!ok[k]) {
 			out[k] = v3(0, 0, 0);
 			continue;
 		}
-		vec3 v = surf_shade(c, &u[k], &sf[k], 0, 1.0, seed[k], &pre[k]);
+		vec3 v = c->direct4 ? surf_secondary(c, &u[k], &sf[k], 0, 1.0, seed[k], dc[k])
+				    : surf_shade(c, &u[k], &sf[k], 0, 1.0, seed[k], &pre[k]);
 		out[k] = v3_load_split(&v); /* returned in memory: read as it was written */
 	}
 }

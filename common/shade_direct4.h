@@ -68,13 +68,13 @@ static const v4m v4_masks[16] __attribute__((aligned(32))) = {
 V4_FN v4m v4_mask(unsigned b) { return v4_masks[b & 15]; }
 
 /*
- * direct(c, p, n, ng, v, m, kd, 1.0, seed, &pre[k], SHADE_HINT_ANY) for the
- * prepared eye hits sf[k] (ok[k], k < n; v[k] toward the viewer) into
- * col[k], with c->points_only: what surf_shade's direct term is at depth 0.
+ * direct(c, p, n, ng, -u[k].d, m, kd, 1.0, seed, &pre[k], SHADE_HINT_ANY)
+ * for the prepared hits sf[k] (ok[k], k < n) of eye rays u[k] into col[k],
+ * with c->points_only: what surf_shade's direct term is at depth 0.
  * all_shadows: c->all_shadows, folded as in direct_body.
  */
-V4_FN void direct4_body(const struct shade_ctx *c, const struct surf sf[4], const vec3 v[4], const bool ok[4], int n,
-			 const struct shadow_pre pre[4], vec3 col[4], const bool all_shadows)
+V4_FN void direct4_body(const struct shade_ctx *c, const struct ray u[4], const struct surf sf[4], const bool ok[4],
+			 int n, const struct shadow_pre pre[4], vec3 col[4], const bool all_shadows)
 {
 	const bool shadows = all_shadows || !c->s->image.no_shadows;
 	const double cut = c->cut; /* x 1 sample: cut * n_samples is cut */
@@ -105,9 +105,9 @@ V4_FN void direct4_body(const struct shade_ctx *c, const struct surf sf[4], cons
 #define NX(k) sf[j[k]].n.x
 #define NY(k) sf[j[k]].n.y
 #define NZ(k) sf[j[k]].n.z
-#define VX(k) v[j[k]].x
-#define VY(k) v[j[k]].y
-#define VZ(k) v[j[k]].z
+#define VX(k) -u[j[k]].d.x /* v = v3_neg(d), toward the viewer */
+#define VY(k) -u[j[k]].d.y
+#define VZ(k) -u[j[k]].d.z
 #define DIF(k) m[k]->diffuse
 #define TD(k) sf[j[k]].td
 #define DCX(k) m[k]->diff_colour.x
@@ -160,11 +160,11 @@ V4_FN void direct4_body(const struct shade_ctx *c, const struct surf sf[4], cons
 		for (int k = 0; k < 4; k++)
 			wk |= (unsigned)(i < SHADE_PRE_WAYS && (live >> k & 1) && (pre[k].wknown >> i & 1)) << k;
 		struct v4vec LD;
-		v4d dist, ndotl;
+		v4d ndotl;
 		unsigned lit = 0;
 		if (wk != live) {
 			struct v4vec TO = { v4_all(lp.x) - P.x, v4_all(lp.y) - P.y, v4_all(lp.z) - P.z };
-			dist = (v4d)_mm256_sqrt_pd((__m256d)v4_dot(TO, TO)); /* sqrt: correctly rounded, as sqrt() */
+			v4d dist = (v4d)_mm256_sqrt_pd((__m256d)v4_dot(TO, TO)); /* correctly rounded, as sqrt() */
 			v4d inv = v4_all(1) / dist;
 			LD = (struct v4vec){ TO.x * inv, TO.y * inv, TO.z * inv };
 			ndotl = v4_dot(N, LD);
@@ -180,23 +180,20 @@ V4_FN void direct4_body(const struct shade_ctx *c, const struct surf sf[4], cons
 #define WX(k) w[k]->ldir.x
 #define WY(k) w[k]->ldir.y
 #define WZ(k) w[k]->ldir.z
-#define WD(k) w[k]->dist
 #define WN(k) w[k]->ndotl
 			struct v4vec LW = { LANES(WX), LANES(WY), LANES(WZ) };
 			if (wk == live) {
-				LD = LW, dist = LANES(WD), ndotl = LANES(WN);
+				LD = LW, ndotl = LANES(WN);
 			} else {
 				v4m msk = v4_mask(wk);
 				LD = (struct v4vec){ v4_sel(msk, LW.x, LD.x), v4_sel(msk, LW.y, LD.y), v4_sel(msk, LW.z, LD.z) };
-				dist = v4_sel(msk, LANES(WD), dist), ndotl = v4_sel(msk, LANES(WN), ndotl);
+				ndotl = v4_sel(msk, LANES(WN), ndotl);
 			}
 #undef WX
 #undef WY
 #undef WZ
-#undef WD
 #undef WN
 		}
-		(void)dist;
 		const bool sh = shadows && (all_shadows || !l->no_shadows);
 		unsigned act = live & lit, traced = 0, later = 0;
 		for (unsigned b = act; b; b &= b - 1) {
@@ -269,14 +266,14 @@ V4_FN void direct4_body(const struct shade_ctx *c, const struct surf sf[4], cons
 }
 
 /* direct4_body with the context's flag folded (c->points_only holds). */
-static __attribute__((target("avx2"))) void direct4(const struct shade_ctx *c, const struct surf sf[4],
-						    const vec3 v[4], const bool ok[4], int n,
+static __attribute__((target("avx2"))) void direct4(const struct shade_ctx *c, const struct ray u[4],
+						    const struct surf sf[4], const bool ok[4], int n,
 						    const struct shadow_pre pre[4], vec3 col[4])
 {
 	if (c->all_shadows)
-		direct4_body(c, sf, v, ok, n, pre, col, true);
+		direct4_body(c, u, sf, ok, n, pre, col, true);
 	else
-		direct4_body(c, sf, v, ok, n, pre, col, false);
+		direct4_body(c, u, sf, ok, n, pre, col, false);
 }
 
 #undef V4_FN

@@ -385,19 +385,18 @@ static int check_direct4(const struct shade_ctx *c, const struct accel *a, int v
 			if (mode == 2)
 				pre[k].known = pre[k].occ = pre[k].wknown = 0; /* nothing known */
 		}
-		vec3 v[4], col[4];
-		for (int k = 0; k < 4; k++)
-			v[k] = v3_neg(u[k].d);
-		direct4(c, sf, v, ok, n, pre, col);
+		vec3 col[4];
+		direct4(c, u, sf, ok, n, pre, col);
 		for (int k = 0; k < n; k++) {
 			if (!ok[k])
 				continue;
 			const struct shader_mat *m = sf[k].m;
 			double kd = m->diffuse * (1 - sf[k].td);
 			uint64_t seed = (uint64_t)i * 4 + (uint64_t)k;
-			vec3 want = c->all_shadows ? direct_body(c, sf[k].p, sf[k].n, sf[k].ng, v[k], m, kd, 1.0, seed,
+			vec3 v = v3_neg(u[k].d);
+			vec3 want = c->all_shadows ? direct_body(c, sf[k].p, sf[k].n, sf[k].ng, v, m, kd, 1.0, seed,
 								  &pre[k], SHADE_HINT_ANY, true, true)
-						   : direct_body(c, sf[k].p, sf[k].n, sf[k].ng, v[k], m, kd, 1.0, seed,
+						   : direct_body(c, sf[k].p, sf[k].n, sf[k].ng, v, m, kd, 1.0, seed,
 								  &pre[k], SHADE_HINT_ANY, true, false);
 			differ += memcmp(&want, &col[k], sizeof want) != 0;
 			*lit += maxc(want) > 0;
