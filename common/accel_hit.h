@@ -61,24 +61,17 @@ static inline __attribute__((always_inline)) BVH_ATTR bool BVH_HIT(const struct 
 			int m;
 			const uint32_t *ci, *cn; /* the node's idx[] and n[] */
 			BVH_NODE(nodes8, nodes, idx, &q, oct, tmin, tmax4, tn, m, ci, cn);
-			if (m && !(m & (m - 1))) { /* one child */
-				int c = __builtin_ctz((unsigned)m);
-				idx = ci[c];
-				n = cn[c];
-				continue;
-			}
-			int m2 = m & (m - 1); /* m without its lowest child */
-			if (m2 && !(m2 & (m2 - 1))) { /* two children */
-				int c0 = __builtin_ctz((unsigned)m), c1 = __builtin_ctz((unsigned)m2);
-				if (tn[c0] > tn[c1]) { /* the nearer first; ties keep slot order */
-					int tc = c0;
-					c0 = c1, c1 = tc;
-				}
-				stack[sp].idx = ci[c1];
-				stack[sp].n = cn[c1];
-				stack[sp++].t = tn[c1];
-				idx = ci[c0];
-				n = cn[c0];
+			unsigned m2 = (unsigned)m & ((unsigned)m - 1); /* m without its lowest child */
+			if (m && !(m2 & (m2 - 1))) { /* one or two children, without a branch between them */
+				int c0 = __builtin_ctz((unsigned)m), c1 = __builtin_ctz(m2 ? m2 : (unsigned)m);
+				bool swap = tn[c0] > tn[c1]; /* the nearer first; ties keep slot order */
+				int a = swap ? c1 : c0, b = swap ? c0 : c1;
+				stack[sp].idx = ci[b]; /* a second child's entry, kept only when there is one */
+				stack[sp].n = cn[b];
+				stack[sp].t = tn[b];
+				sp += m2 != 0;
+				idx = ci[a];
+				n = cn[a];
 				continue;
 			}
 			if (m) { /* nearest first; the others pushed farthest first */
