@@ -194,7 +194,6 @@ static inline double max3(double a, double b, double c)
 	return m > c ? m : c;
 }
 static double maxc(vec3 a) { return max3(a.x, a.y, a.z); }
-static double maxabs(vec3 a) { return v3_maxabs(a); }
 
 /* struct light_way from p (normal n) to lp: direct()'s arithmetic. */
 static inline struct light_way light_way_at(vec3 p, vec3 n, vec3 lp)
@@ -544,14 +543,14 @@ static vec3 transmittance(const struct shade_ctx *c, vec3 o, vec3 lp, uint32_t l
 }
 
 /* The largest |channel|, or NaN when a channel is NaN or infinite (0 * it is NaN). */
-static double maxabs_nan(vec3 a) { return maxabs(a) + 0 * (a.x + a.y + a.z); }
+static double maxabs_nan(vec3 a) { return v3_maxabs(a) + 0 * (a.x + a.y + a.z); }
 
 /*
  * POW SKIP: whether direct() needs a sample's highlight hl = xm_pow_lite(rv,
  * power) to get its term in (kcd ndotl + kcs hl) to the bit. With ub >= hl
  * (xm_pow_ub) and b = max|kcs| ub >= every channel's |kcs hl| (rounded
  * products and sums of magnitudes are monotonic):
- * -1: the term stays below the cut (maxabs(term) weight < lim) with every
+ * -1: the term stays below the cut (v3_maxabs(term) weight < lim) with every
  *     channel at its largest, so direct() skips the sample whatever hl is;
  *  0: b is below an eighth of an ulp of every channel's kcd ndotl (normal
  *     doubles), so each sum rounds to kcd ndotl, as it does with hl = 0;
@@ -595,7 +594,7 @@ static bool passes_without(vec3 in, vec3 kcd, vec3 kcs, double ndotl, double wei
 	if (!(in.x >= 0 && in.y >= 0 && in.z >= 0 && kcd.x >= 0 && kcd.y >= 0 && kcd.z >= 0 && kcs.x >= 0 &&
 	      kcs.y >= 0 && kcs.z >= 0 && ndotl >= 0 && weight >= 0))
 		return false;
-	return maxabs(phong_term(in, kcd, kcs, ndotl, 0.0)) * weight >= lim;
+	return v3_maxabs(phong_term(in, kcd, kcs, ndotl, 0.0)) * weight >= lim;
 }
 
 /*
@@ -688,7 +687,7 @@ static inline __attribute__((always_inline)) vec3 direct_body(const struct shade
 				}
 			}
 			vec3 term = phong_term(in, kcd, kcs, ndotl, hl);
-			if (!later && maxabs(term) * weight < cut * n_samples)
+			if (!later && v3_maxabs(term) * weight < cut * n_samples)
 				continue;
 			if (traced) {
 				vec3 t = transmittance(c, offset_by(p, ng, ldir, eps), lp, i, pre, obj);
