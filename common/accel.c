@@ -751,6 +751,11 @@ bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ra
 	return false;
 }
 
+bool accel_light_buffered(const struct accel *a, uint32_t light)
+{
+	return a->lbuf && a->root && light < a->s->n_lights && a->lbuf[light];
+}
+
 bool accel_use_avx2(void)
 {
 #if ACCEL_AVX2

@@ -134,6 +134,9 @@ bool accel_occluded_hint(const struct accel *a, const struct ray *r, uint32_t *h
  * accel_occluded_hint's answer. Thread-safe.
  */
 bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ray *r, uint32_t *hint);
+/* Whether point light number light has a light buffer (accel_occluded_light
+ * answers its shadow rays from one). */
+bool accel_light_buffered(const struct accel *a, uint32_t light);
 /*
  * accel_occluded_hint for four rays at once (occ[i] is what
  * accel_occluded(a, &r[i]) gives), sharing one hint: faster when the rays

@@ -148,6 +148,11 @@ static uint32_t *light_hint(const struct shade_ctx *c, uint32_t i, uint32_t obj)
  * shadow_pre keeps a bit per light. direct() then takes a ray's answer
  * from there instead of tracing it: shadow_packets builds the same ray
  * with direct()'s and transmittance()'s arithmetic, so the same answer.
+ * BUFFERED LIGHTS: a light with a light buffer (accel_light_buffered)
+ * answers the block's rays one by one from its buffer instead, as it does
+ * the mirror hits' (balls_s4 -3.2%; docs/performance.md, round 23): the
+ * same answers, and the packet's set-up and walk cost more than the
+ * buffer's few entries.
  */
 #define SHADE_PRE_LIGHTS 32
 /* In scenes with transparent materials, the transmittances of the shadow
@@ -1064,14 +1069,20 @@ static bool packet_light(const struct shade_ctx *c, uint32_t i)
 }
 
 /* The m (1..4) shadow rays r[0..m) of hits who[0..m) toward light i as one
- * occlusion packet (lanes past m repeat the last ray), their answers into
- * pre. */
+ * occlusion packet (lanes past m repeat the last ray), or one by one
+ * through light i's buffer where it has one (BUFFERED LIGHTS), their
+ * answers into pre. */
 static void occlusion_packet(const struct shade_ctx *c, uint32_t i, struct ray r[4], const int who[4], int m,
 			     struct shadow_pre pre[4])
 {
-	pad_packet(r, m);
 	bool occ[4];
-	accel_occluded4(c->a, r, occ, light_hint(c, i, SHADE_HINT_ANY));
+	if (accel_light_buffered(c->a, i)) {
+		for (int j = 0; j < m; j++)
+			occ[j] = accel_occluded_light(c->a, i, &r[j], light_hint(c, i, SHADE_HINT_ANY));
+	} else {
+		pad_packet(r, m);
+		accel_occluded4(c->a, r, occ, light_hint(c, i, SHADE_HINT_ANY));
+	}
 	for (int j = 0; j < m; j++) {
 		pre[who[j]].known |= 1u << i;
 		pre[who[j]].occ |= (uint32_t)occ[j] << i;

@@ -190,6 +190,24 @@ static vec3 near_surface(vec3 c, double r)
 	}
 }
 
+/* A scene of a few objects keeps the tree alone (LBUF_MIN_REFS): its
+ * light has no buffer, and accel_light_buffered says so. */
+static void small_scene_unbuffered(void)
+{
+	static const char text[] = "camera look-from (0 0 10) look-at (0 0 0) ;\nimage xsize 4 ysize 4 ;\n"
+				   "light position (5 5 5) ;\nobject sphere centre (0 0 0) radius 1 ; ;\n";
+	struct scene *s = NULL;
+	struct scene_error err = { 0 };
+	CHECK(parse_buffer("small.sce", text, strlen(text), 0, &s, &err) == 0);
+	struct accel *a = NULL;
+	if (s)
+		CHECK(accel_build(s, &a, &err) == 0);
+	if (a)
+		CHECK(!accel_light_buffered(a, 0));
+	accel_free(a);
+	scene_free(s);
+}
+
 int main(void)
 {
 	char *text = scene_text();
@@ -214,7 +232,10 @@ int main(void)
 		if (!(a->lbuf && a->lbuf[i]))
 			fprintf(stderr, "light %u: no buffer\n", i);
 		CHECK(a->lbuf && a->lbuf[i] != NULL);
+		CHECK(accel_light_buffered(a, i)); /* what shading asks (BUFFERED LIGHTS) */
 	}
+	CHECK(!accel_light_buffered(a, N_LIGHTS)); /* no such light */
+	small_scene_unbuffered();
 
 	/* ZOOMED FACES (accel_light.c): some face's cells cover a window
 	 * (the last light sees the whole scene in a small part of a face) */
