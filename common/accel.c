@@ -727,7 +727,9 @@ bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ra
 		face = 4 + (uz < 0), p = ux / az, q = uy / az;
 	uint32_t cell = (face * lb->n + lbuf_cell(lb, face, 1, q)) * lb->n + lbuf_cell(lb, face, 0, p);
 	__builtin_prefetch(&lb->start[cell]); /* its load waits on memory: under the hint's test */
-	if (hint_occludes(a, g, *hint, &t) || unb_any_occludes(a, g, &t, hint))
+	/* the hint as hint_occludes tests it, its sphere or triangle inline */
+	if ((*hint != ACCEL_NO_HINT && ref_valid(g, *hint) && lbuf_ref_occludes(a, g, *hint, &t)) ||
+	    unb_any_occludes(a, g, &t, hint))
 		return true;
 	for (uint32_t k = 0; k < lb->n_near; k++) {
 		if (cancel_poll_every(k)) /* CANCELLATION, as a leaf's references */
