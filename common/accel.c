@@ -731,11 +731,22 @@ bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ra
 	if ((*hint != ACCEL_NO_HINT && ref_valid(g, *hint) && lbuf_ref_occludes(a, g, *hint, &t)) ||
 	    unb_any_occludes(a, g, &t, hint))
 		return true;
-	for (uint32_t k = 0; k < lb->n_near; k++) {
+	/* FLAT NEAR: the flat triangles first, each decided by its plane
+	 * (tri_occludes' first test) unless the ray may reach it */
+	for (uint32_t k = 0; k < lb->n_near_flat; k++) {
 		if (cancel_poll_every(k)) /* CANCELLATION, as a leaf's references */
 			return false;
-		if (lbuf_ref_occludes(a, g, lb->near[k], &t)) {
-			*hint = lb->near[k];
+		const struct lbuf_near *nr = &lb->near[k];
+		if (__builtin_expect(!flat_behind(nr->flat, nr->c, &t), 0) && tri_occludes(g, nr->ref, &t)) {
+			*hint = nr->ref;
+			return true;
+		}
+	}
+	for (uint32_t k = lb->n_near_flat; k < lb->n_near; k++) {
+		if (cancel_poll_every(k))
+			return false;
+		if (lbuf_ref_occludes(a, g, lb->near[k].ref, &t)) {
+			*hint = lb->near[k].ref;
 			return true;
 		}
 	}

@@ -179,6 +179,15 @@ struct lbuf_ent {
 	float dmin;
 	uint32_t ref;
 };
+/* A NEAR reference; FLAT NEAR: a flat triangle's plane (FLAT TRIANGLES,
+ * accel_trace.h) kept beside it, flat its axis and c its coordinate (flat
+ * 3 for any other reference), so that the queries decide flat_behind
+ * without the triangle's loads (balls_s4's floor: two triangles every
+ * query tests). */
+struct lbuf_near {
+	double c;
+	uint32_t ref, flat;
+};
 struct lbuf {
 	vec3 lp;         /* the light's position */
 	double R;        /* answers for origins with |o - lp|_inf <= R */
@@ -189,9 +198,10 @@ struct lbuf {
 	double org[6][2], scale[6][2];
 	uint32_t *start; /* cell k's entries: ent[start[k] .. start[k + 1]) */
 	struct lbuf_ent *ent;
-	uint32_t *near; /* references whose boxes come within 3D of the light,
-			   tested by every query (accel_light.c) */
-	uint32_t n_near;
+	struct lbuf_near *near; /* references whose boxes come within 3D of the
+				   light, tested by every query (accel_light.c):
+				   the flat triangles first, n_near_flat of them */
+	uint32_t n_near, n_near_flat;
 };
 
 /* The cell column (k 0) or row (k 1) of projection p on face f (both in

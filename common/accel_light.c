@@ -225,6 +225,20 @@ static uint32_t stamp_slot(const struct group *g, uint32_t ref)
 	}
 }
 
+/* NEAR reference ref with its plane where it is a flat triangle (FLAT NEAR:
+ * the axis and the first vertex's coordinate, as tri_flat_behind reads them) */
+static struct lbuf_near near_entry(const struct group *g, uint32_t ref)
+{
+	struct lbuf_near e = { 0, ref, 3 };
+	if (REF_KIND(ref) == REF_TRI && g->tri_flat[REF_IDX(ref)] <= 2) {
+		const struct gtri *gt = &g->tri[REF_IDX(ref)];
+		const struct gmesh *m = &g->mesh[gt->mesh];
+		e.flat = g->tri_flat[REF_IDX(ref)];
+		e.c = geom_comp(&m->v[tri_ix(m, gt->tri)[0]], (int)e.flat);
+	}
+	return e;
+}
+
 static void lbuf_free(struct lbuf *lb)
 {
 	if (!lb)
@@ -282,7 +296,7 @@ static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *box
 			dist = geom_fmax(dist, l > 0 ? l : h < 0 ? -h : 0);
 		}
 		if (dist <= 3 * D) { /* NEAR: every query tests it */
-			lb->near[lb->n_near++] = g->refs[k];
+			lb->near[lb->n_near++].ref = g->refs[k];
 			continue;
 		}
 		uint32_t n0 = n_rects;
@@ -300,7 +314,7 @@ static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *box
 		}
 		if (faces > 6.0 / LBUF_WIDE) { /* WIDE: tested by every query too */
 			n_rects = n0;
-			lb->near[lb->n_near++] = g->refs[k];
+			lb->near[lb->n_near++].ref = g->refs[k];
 			continue;
 		}
 		total += area;
@@ -315,15 +329,25 @@ static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *box
 		goto oom;
 	uint32_t nn = 0; /* NEAR: one entry per reference */
 	for (uint32_t k = 0; k < lb->n_near; k++) {
-		uint32_t *st = &stamp[stamp_slot(g, lb->near[k])];
+		uint32_t *st = &stamp[stamp_slot(g, lb->near[k].ref)];
 		if (!*st) {
 			*st = 1;
-			lb->near[nn++] = lb->near[k];
+			lb->near[nn++] = near_entry(g, lb->near[k].ref);
 		}
 	}
 	for (uint32_t k = 0; k < nn; k++)
-		stamp[stamp_slot(g, lb->near[k])] = 0;
+		stamp[stamp_slot(g, lb->near[k].ref)] = 0;
 	lb->n_near = nn;
+	/* FLAT NEAR: the flat triangles first (swapped forward; the order
+	 * only decides which blocker a query names as its hint) */
+	uint32_t nf = 0;
+	for (uint32_t k = 0; k < nn; k++)
+		if (lb->near[k].flat <= 2) {
+			struct lbuf_near x = lb->near[nf];
+			lb->near[nf++] = lb->near[k];
+			lb->near[k] = x;
+		}
+	lb->n_near_flat = nf;
 	/* a counting sort in one array: start[k + 1] counts cell k's entries,
 	 * then (summed) is cell k's end; the rectangles, filled last first,
 	 * move it down to cell k's first entry, each cell nearest first */
@@ -370,7 +394,7 @@ static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *box
 	struct lbuf_ent *ent_fit = realloc(lb->ent, (out ? out : 1) * sizeof *lb->ent);
 	if (ent_fit)
 		lb->ent = ent_fit;
-	uint32_t *near_fit = realloc(lb->near, (lb->n_near ? lb->n_near : 1) * sizeof *lb->near);
+	struct lbuf_near *near_fit = realloc(lb->near, (lb->n_near ? lb->n_near : 1) * sizeof *lb->near);
 	if (near_fit)
 		lb->near = near_fit;
 	free(rects);

@@ -237,18 +237,24 @@ static inline uint32_t group_ref(const struct group *g, uint32_t k)
  * of acne). Such rays skip the test since RENDER_PIXEL_REV 5
  * (docs/performance.md, round 19).
  */
-static inline __attribute__((always_inline)) bool tri_flat_behind(const struct group *g, uint32_t i,
-								   const struct trace *r, const vec3 *a)
+static inline __attribute__((always_inline)) bool flat_behind(uint32_t p, double c, const struct trace *r)
 {
-	uint32_t p = g->tri_flat[i];
 	if (p > 2 || !(r->tmin >= 0))
 		return false;
-	double c = geom_comp(a, (int)p), op = geom_comp(&r->o, (int)p), dp = geom_comp(&r->d, (int)p);
+	double op = geom_comp(&r->o, (int)p), dp = geom_comp(&r->d, (int)p);
 	if (op > c)
 		return dp >= 0;
 	if (op < c)
 		return dp <= 0;
 	return op == c && (dp > 0 || dp < 0);
+}
+
+/* flat_behind for triangle i of g, whose first vertex is *a */
+static inline __attribute__((always_inline)) bool tri_flat_behind(const struct group *g, uint32_t i,
+								   const struct trace *r, const vec3 *a)
+{
+	uint32_t p = g->tri_flat[i];
+	return p <= 2 && flat_behind(p, geom_comp(a, (int)p), r);
 }
 
 /* ref_test of triangle reference ref. */

@@ -2,7 +2,8 @@
  * test_lbuf.c - LIGHT BUFFERS (common/accel_light.c) change no answer:
  * accel_occluded_light gives accel_occluded's answer (the tree's) for
  * shadow rays toward each light, on a scene of spheres from tiny to large,
- * open cylinders at every tilt, a few boxes and triangles and a plane, with
+ * open cylinders at every tilt, a few boxes and triangles, a floor
+ * triangle wide seen from every light (NEAR, FLAT NEAR) and a plane, with
  * lights far away, among the objects, at a sphere's surface, inside a
  * sphere and on a box's face. The rays start anywhere in and around the
  * scene (beyond the buffer's reach too), on the surfaces as shading starts
@@ -36,9 +37,9 @@ static const vec3 lights[] = {
 #define N_LIGHTS (sizeof lights / sizeof lights[0])
 
 /* the box and the triangles' corners (as written into the scene) */
-static vec3 corners[8 + 3 * 20];
+static vec3 corners[8 + 3 * 21];
 static int n_corners;
-static vec3 tri_mid[20];
+static vec3 tri_mid[21];
 static vec3 sliver[3]; /* the sliver beside light 1 */
 
 static char *scene_text(void)
@@ -75,6 +76,17 @@ static char *scene_text(void)
 		corners[n_corners++] = b;
 		corners[n_corners++] = c;
 		tri_mid[i] = v3_scale(v3_add(a, v3_add(b, c)), 1.0 / 3);
+		PUT("object triangle a (%.17g %.17g %.17g) b (%.17g %.17g %.17g) c (%.17g %.17g %.17g) ; ;\n", a.x, a.y,
+		    a.z, b.x, b.y, b.z, c.x, c.y, c.z);
+	}
+	{ /* a floor triangle in the plane z = -5.5 (FLAT TRIANGLES), wide
+	     seen from every light: NEAR, with its plane (FLAT NEAR); rays
+	     from below it are blocked by it, rays from above never */
+		vec3 a = v3(-40, -40, -5.5), b = v3(60, -40, -5.5), c = v3(-40, 60, -5.5);
+		corners[n_corners++] = a;
+		corners[n_corners++] = b;
+		corners[n_corners++] = c;
+		tri_mid[20] = v3_scale(v3_add(a, v3_add(b, c)), 1.0 / 3);
 		PUT("object triangle a (%.17g %.17g %.17g) b (%.17g %.17g %.17g) c (%.17g %.17g %.17g) ; ;\n", a.x, a.y,
 		    a.z, b.x, b.y, b.z, c.x, c.y, c.z);
 	}
@@ -235,6 +247,12 @@ int main(void)
 		CHECK(accel_light_buffered(a, i)); /* what shading asks (BUFFERED LIGHTS) */
 	}
 	CHECK(!accel_light_buffered(a, N_LIGHTS)); /* no such light */
+	int flat_near = 0; /* FLAT NEAR: the floor in every light's NEAR list */
+	for (uint32_t i = 0; i < N_LIGHTS; i++)
+		for (uint32_t k = 0; a->lbuf && a->lbuf[i] && k < a->lbuf[i]->n_near; k++)
+			flat_near += a->lbuf[i]->near[k].flat <= 2;
+	printf("test_lbuf: %d flat NEAR triangles\n", flat_near);
+	CHECK(flat_near > 0);
 	small_scene_unbuffered();
 
 	/* ZOOMED FACES (accel_light.c): some face's cells cover a window
@@ -252,6 +270,8 @@ int main(void)
 		vec3 lp = lights[i];
 		for (int k = 0; k < 20000; k++) /* anywhere in and around the scene, beyond R too */
 			ask(a, i, v3(range(-8, 8), range(-8, 8), range(-8, 8)));
+		for (int k = 0; k < 5000; k++) /* below the floor and on it (FLAT NEAR) */
+			ask(a, i, v3(range(-8, 8), range(-8, 8), k % 5 ? range(-7, -5.5) : -5.5));
 		for (int k = 0; k < 200; k++) /* far beyond the buffer's reach */
 			ask(a, i, v3_scale(unit(), 1e3));
 		for (int k = 0; k < 20000; k++) { /* on the spheres, as shading starts rays */
