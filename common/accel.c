@@ -732,8 +732,11 @@ bool accel_occluded_light(const struct accel *a, uint32_t light, const struct ra
 	    unb_any_occludes(a, g, &t, hint))
 		return true;
 	/* FLAT NEAR: the flat triangles first, each decided by its plane
-	 * (tri_occludes' first test) unless the ray may reach it */
-	for (uint32_t k = 0; k < lb->n_near_flat; k++) {
+	 * (tri_occludes' first test) unless the ray may reach it; none from an
+	 * origin in the box where every one is behind (accel_light.c) */
+	const vec3 o = t.o, flo = lb->flat_lo, fhi = lb->flat_hi;
+	bool all_behind = o.x >= flo.x && o.x <= fhi.x && o.y >= flo.y && o.y <= fhi.y && o.z >= flo.z && o.z <= fhi.z;
+	for (uint32_t k = 0; k < (all_behind ? 0 : lb->n_near_flat); k++) {
 		if (cancel_poll_every(k)) /* CANCELLATION, as a leaf's references */
 			return false;
 		const struct lbuf_near *nr = &lb->near[k];

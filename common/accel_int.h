@@ -202,6 +202,10 @@ struct lbuf {
 				   light, tested by every query (accel_light.c):
 				   the flat triangles first, n_near_flat of them */
 	uint32_t n_near, n_near_flat;
+	/* FLAT NEAR: the origins o (flat_lo <= o <= flat_hi) from which the
+	 * ray toward the light is behind every one of those flat triangles
+	 * (flat_behind true for each: the loop over them is skipped) */
+	vec3 flat_lo, flat_hi;
 };
 
 /* The cell column (k 0) or row (k 1) of projection p on face f (both in

@@ -239,6 +239,34 @@ static struct lbuf_near near_entry(const struct group *g, uint32_t ref)
 	return e;
 }
 
+/*
+ * FLAT NEAR's box: the origins o from which flat_behind holds for every flat
+ * NEAR triangle of lb on the ray o + t d, d = lp - o, t >= tmin >= 0 (the
+ * queries' rays). For a triangle in the plane x_p = c, the sign of d_p =
+ * fl(lp_p - o_p) is that of lp_p - o_p (rounding keeps signs and zeros), so
+ * flat_behind holds for c <= o_p <= lp_p when c < lp_p (o on the plane's
+ * side of the light or in the plane, the ray not moving toward it) and for
+ * lp_p <= o_p <= c when c > lp_p; a plane through the light (c = lp_p)
+ * leaves the box empty.
+ */
+static void flat_box(struct lbuf *lb)
+{
+	double lo[3] = { -INFINITY, -INFINITY, -INFINITY }, hi[3] = { INFINITY, INFINITY, INFINITY };
+	for (uint32_t k = 0; k < lb->n_near_flat; k++) {
+		int p = (int)lb->near[k].flat;
+		double c = lb->near[k].c, l = geom_comp(&lb->lp, p);
+		if (c != l) {
+			lo[p] = geom_fmax(lo[p], geom_fmin(c, l));
+			hi[p] = geom_fmin(hi[p], geom_fmax(c, l));
+		} else {
+			lo[p] = INFINITY;
+			hi[p] = -INFINITY;
+		}
+	}
+	lb->flat_lo = v3(lo[0], lo[1], lo[2]);
+	lb->flat_hi = v3(hi[0], hi[1], hi[2]);
+}
+
 static void lbuf_free(struct lbuf *lb)
 {
 	if (!lb)
@@ -348,6 +376,7 @@ static struct lbuf *lbuf_build(const struct group *g, const struct geom_box *box
 			lb->near[k] = x;
 		}
 	lb->n_near_flat = nf;
+	flat_box(lb);
 	/* a counting sort in one array: start[k + 1] counts cell k's entries,
 	 * then (summed) is cell k's end; the rectangles, filled last first,
 	 * move it down to cell k's first entry, each cell nearest first */

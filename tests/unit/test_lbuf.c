@@ -3,7 +3,8 @@
  * accel_occluded_light gives accel_occluded's answer (the tree's) for
  * shadow rays toward each light, on a scene of spheres from tiny to large,
  * open cylinders at every tilt, a few boxes and triangles, a floor
- * triangle wide seen from every light (NEAR, FLAT NEAR) and a plane, with
+ * triangle and a ceiling one wide seen from the lights (NEAR, FLAT NEAR)
+ * and a plane, with
  * lights far away, among the objects, at a sphere's surface, inside a
  * sphere and on a box's face. The rays start anywhere in and around the
  * scene (beyond the buffer's reach too), on the surfaces as shading starts
@@ -89,6 +90,8 @@ static char *scene_text(void)
 		tri_mid[20] = v3_scale(v3_add(a, v3_add(b, c)), 1.0 / 3);
 		PUT("object triangle a (%.17g %.17g %.17g) b (%.17g %.17g %.17g) c (%.17g %.17g %.17g) ; ;\n", a.x, a.y,
 		    a.z, b.x, b.y, b.z, c.x, c.y, c.z);
+		/* and a ceiling in x = 9 beyond them (a plane on the light's far side) */
+		PUT("object triangle a (9 -40 -40) b (9 60 -40) c (9 -40 60) ; ;\n");
 	}
 	{ /* a long diagonal sliver about half a unit from light 1, split into pieces
 	     (LONG slivers, accel_build.c) of which several are WIDE: its NEAR
@@ -270,8 +273,10 @@ int main(void)
 		vec3 lp = lights[i];
 		for (int k = 0; k < 20000; k++) /* anywhere in and around the scene, beyond R too */
 			ask(a, i, v3(range(-8, 8), range(-8, 8), range(-8, 8)));
-		for (int k = 0; k < 5000; k++) /* below the floor and on it (FLAT NEAR) */
+		for (int k = 0; k < 5000; k++) { /* below the floor and on it, beyond the ceiling and on it (FLAT NEAR) */
 			ask(a, i, v3(range(-8, 8), range(-8, 8), k % 5 ? range(-7, -5.5) : -5.5));
+			ask(a, i, v3(k % 5 ? range(9, 10) : 9, range(-8, 8), range(-8, 8)));
+		}
 		for (int k = 0; k < 200; k++) /* far beyond the buffer's reach */
 			ask(a, i, v3_scale(unit(), 1e3));
 		for (int k = 0; k < 20000; k++) { /* on the spheres, as shading starts rays */
