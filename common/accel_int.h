@@ -199,7 +199,7 @@ struct lbuf {
 	uint32_t *start; /* cell k's entries: ent[start[k] .. start[k + 1]) */
 	struct lbuf_ent *ent;
 	struct lbuf_near *near; /* references whose boxes come within 3D of the
-				   light, tested by every query (accel_light.c):
+				   light, or WIDE, tested by every query (accel_light.c):
 				   the flat triangles first, n_near_flat of them */
 	uint32_t n_near, n_near_flat;
 	/* FLAT NEAR: the origins o (flat_lo <= o <= flat_hi) from which the

@@ -1129,8 +1129,8 @@ static __attribute__((noinline)) void cross_packet(const struct shade_ctx *c, co
 /*
  * shadow_packets in a scene with transparent materials (TRANSPARENT
  * BOXES), for hits at any depth (depth: the hits', for the hints): a block
- * whose rays toward a light all miss the boxes is traced with
- * accel_occluded4 as above; one where some ray may cross a transparent
+ * whose rays toward a light all miss the boxes is traced as above
+ * (occlusion_packet: a packet, or the light's buffer); one where some ray may cross a transparent
  * surface, as one packet of crossings (cross_packet) when it is a whole
  * packet of one octant, and otherwise the rays that miss the boxes alone,
  * the others left to direct(). The crossings are found whether or not

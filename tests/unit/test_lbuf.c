@@ -3,7 +3,7 @@
  * accel_occluded_light gives accel_occluded's answer (the tree's) for
  * shadow rays toward each light, on a scene of spheres from tiny to large,
  * open cylinders at every tilt, a few boxes and triangles, a floor
- * triangle and a ceiling one wide seen from the lights (NEAR, FLAT NEAR)
+ * triangle and a wall one, wide seen from most lights (NEAR, FLAT NEAR)
  * and a plane, with
  * lights far away, among the objects, at a sphere's surface, inside a
  * sphere and on a box's face. The rays start anywhere in and around the
@@ -90,7 +90,8 @@ static char *scene_text(void)
 		tri_mid[20] = v3_scale(v3_add(a, v3_add(b, c)), 1.0 / 3);
 		PUT("object triangle a (%.17g %.17g %.17g) b (%.17g %.17g %.17g) c (%.17g %.17g %.17g) ; ;\n", a.x, a.y,
 		    a.z, b.x, b.y, b.z, c.x, c.y, c.z);
-		/* and a ceiling in x = 9 beyond them (a plane on the light's far side) */
+		/* and a wall in x = 9: beyond the scene for most lights, between
+		   it and the lights at x = 30 and 150 */
 		PUT("object triangle a (9 -40 -40) b (9 60 -40) c (9 -40 60) ; ;\n");
 	}
 	{ /* a long diagonal sliver about half a unit from light 1, split into pieces
@@ -250,7 +251,7 @@ int main(void)
 		CHECK(accel_light_buffered(a, i)); /* what shading asks (BUFFERED LIGHTS) */
 	}
 	CHECK(!accel_light_buffered(a, N_LIGHTS)); /* no such light */
-	int flat_near = 0; /* FLAT NEAR: the floor in every light's NEAR list */
+	int flat_near = 0; /* FLAT NEAR: the floor and the wall in the NEAR lists of the lights that see them wide */
 	for (uint32_t i = 0; i < N_LIGHTS; i++)
 		for (uint32_t k = 0; a->lbuf && a->lbuf[i] && k < a->lbuf[i]->n_near; k++)
 			flat_near += a->lbuf[i]->near[k].flat <= 2;
@@ -273,7 +274,7 @@ int main(void)
 		vec3 lp = lights[i];
 		for (int k = 0; k < 20000; k++) /* anywhere in and around the scene, beyond R too */
 			ask(a, i, v3(range(-8, 8), range(-8, 8), range(-8, 8)));
-		for (int k = 0; k < 5000; k++) { /* below the floor and on it, beyond the ceiling and on it (FLAT NEAR) */
+		for (int k = 0; k < 5000; k++) { /* below the floor and on it, beyond the wall and on it (FLAT NEAR) */
 			ask(a, i, v3(range(-8, 8), range(-8, 8), k % 5 ? range(-7, -5.5) : -5.5));
 			ask(a, i, v3(k % 5 ? range(9, 10) : 9, range(-8, 8), range(-8, 8)));
 		}
