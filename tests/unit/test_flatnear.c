@@ -26,6 +26,7 @@
 #include "common/parse.h"
 #include "common/scene.h"
 #include "tests/unit/check.h"
+#include "tests/unit/scene_text.h"
 #define RAND_VEC_SEED 0x243f6a8885a308d3ull
 #include "tests/unit/rand_vec.h"
 
@@ -85,12 +86,8 @@ static double pick(double lo, double hi, double c)
 
 static void scene_run(const char *name, vec3 lp, const char *tris)
 {
-	size_t cap = 1 << 18, len = 0;
-	char *t = malloc(cap);
-	CHECK(t != NULL);
-	if (!t)
-		return;
-#define PUT(...) (len += (size_t)snprintf(t + len, cap - len, __VA_ARGS__))
+	struct scene_text st = st_new(1 << 18);
+#define PUT(...) st_put(&st, __VA_ARGS__)
 	PUT("camera look-from (0 0 10) look-at (0 0 0) ;\nimage xsize 4 ysize 4 ;\n");
 	PUT("light position (%.17g %.17g %.17g) ;\n", lp.x, lp.y, lp.z);
 	for (int i = 0; i < 100; i++)
@@ -100,13 +97,13 @@ static void scene_run(const char *name, vec3 lp, const char *tris)
 #undef PUT
 	struct scene *s = NULL;
 	struct scene_error err = { 0 };
-	if (parse_buffer(name, t, len, 0, &s, &err) != 0) {
-		fprintf(stderr, "%s: %s\n", name, err.msg);
+	if (!st.ok || parse_buffer(name, st.t, st.len, 0, &s, &err) != 0) {
+		fprintf(stderr, "%s: %s\n", name, st.ok ? err.msg : "scene text too long");
 		CHECK(0);
-		free(t);
+		free(st.t);
 		return;
 	}
-	free(t);
+	free(st.t);
 	struct accel *a = NULL;
 	CHECK(accel_build(s, &a, &err) == 0);
 	if (!a || !a->lbuf || !a->lbuf[0]) {

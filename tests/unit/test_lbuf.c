@@ -24,6 +24,7 @@
 #include "common/rng.h"
 #include "common/scene.h"
 #include "tests/unit/check.h"
+#include "tests/unit/scene_text.h"
 #define RAND_VEC_SEED 0x13198a2e03707344ull
 #include "tests/unit/rand_vec.h"
 
@@ -45,11 +46,8 @@ static vec3 sliver[3]; /* the sliver beside light 1 */
 
 static char *scene_text(void)
 {
-	size_t cap = 1 << 20, len = 0;
-	char *t = malloc(cap);
-	if (!t)
-		return NULL;
-#define PUT(...) (len += (size_t)snprintf(t + len, cap - len, __VA_ARGS__))
+	struct scene_text st = st_new(1 << 20);
+#define PUT(...) st_put(&st, __VA_ARGS__)
 	PUT("camera look-from (0 0 10) look-at (0 0 0) ;\nimage xsize 4 ysize 4 ;\n");
 	for (size_t i = 0; i < N_LIGHTS; i++)
 		PUT("light position (%.17g %.17g %.17g) ;\n", lights[i].x, lights[i].y, lights[i].z);
@@ -105,7 +103,9 @@ static char *scene_text(void)
 		    a.z, b.x, b.y, b.z, c.x, c.y, c.z);
 	}
 #undef PUT
-	return len < cap ? t : NULL;
+	if (!st.ok)
+		free(st.t);
+	return st.ok ? st.t : NULL;
 }
 
 static long asked, blocked, lit, differ;
@@ -151,12 +151,8 @@ static vec3 near_surface(vec3 c, double r);
  */
 static void zoom_budget(void)
 {
-	size_t cap = 1 << 18, len = 0;
-	char *t = malloc(cap);
-	CHECK(t != NULL);
-	if (!t)
-		return;
-#define PUT(...) (len += (size_t)snprintf(t + len, cap - len, __VA_ARGS__))
+	struct scene_text st = st_new(1 << 18);
+#define PUT(...) st_put(&st, __VA_ARGS__)
 	PUT("camera look-from (0 0 10) look-at (0 0 0) ;\nimage xsize 4 ysize 4 ;\nlight position (0 0 0) ;\n");
 	for (int i = 0; i < 2000; i++)
 		PUT("object sphere centre (%.17g %.17g %.17g) radius 0.01 ; ;\n", range(-51, -49), range(-1, 1), range(-1, 1));
@@ -165,11 +161,11 @@ static void zoom_budget(void)
 		PUT("object sphere centre (%.17g 0 0) radius %.17g ; ;\n", -x, 0.3 * x);
 	}
 #undef PUT
-	CHECK(len < cap);
+	CHECK(st.ok);
 	struct scene *s = NULL;
 	struct scene_error err = { 0 };
-	CHECK(parse_buffer("budget.sce", t, len, 0, &s, &err) == 0);
-	free(t);
+	CHECK(st.ok && parse_buffer("budget.sce", st.t, st.len, 0, &s, &err) == 0);
+	free(st.t);
 	struct accel *a = NULL;
 	if (s)
 		CHECK(accel_build(s, &a, &err) == 0);
