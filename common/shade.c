@@ -1076,12 +1076,13 @@ static void occlusion_packet(const struct shade_ctx *c, uint32_t i, struct ray r
 			     struct shadow_pre pre[4])
 {
 	bool occ[4];
+	uint32_t *hint = light_hint(c, i, SHADE_HINT_ANY); /* the light's, shared by the block's rays */
 	if (accel_light_buffered(c->a, i)) {
 		for (int j = 0; j < m; j++)
-			occ[j] = accel_occluded_light(c->a, i, &r[j], light_hint(c, i, SHADE_HINT_ANY));
+			occ[j] = accel_occluded_light(c->a, i, &r[j], hint);
 	} else {
 		pad_packet(r, m);
-		accel_occluded4(c->a, r, occ, light_hint(c, i, SHADE_HINT_ANY));
+		accel_occluded4(c->a, r, occ, hint);
 	}
 	for (int j = 0; j < m; j++) {
 		pre[who[j]].known |= 1u << i;
